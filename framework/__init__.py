@@ -1,0 +1,51 @@
+"""metaik: inverse kinematics by optimization for any robot described by URDF/xacro.
+
+The data flow follows the package layout: robot model (:mod:`~framework.robot`, :mod:`~framework.loading`,
+:mod:`~framework.compose`) → population kinematics (:mod:`~framework.kinematics`) → cost terms → solvers →
+tracking → results and recordings.
+"""
+
+from .compose import Mount, mount, mount_urdf, planar_base_urdf
+from .errors import (
+    ConfigurationError,
+    LimitsError,
+    MetaikError,
+    ResourceError,
+    RobotFileError,
+    SolverError,
+    TaskError,
+    UnknownFrameError,
+    UnknownJointError,
+    UnknownRobotError,
+    UnsupportedJointError,
+)
+from .kinematics import FramePoses
+from .loading import load_robot, robot_from_urdf, robot_index
+from .robot import Joint, JointKind, Robot
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConfigurationError",
+    "FramePoses",
+    "Joint",
+    "JointKind",
+    "LimitsError",
+    "MetaikError",
+    "Mount",
+    "ResourceError",
+    "Robot",
+    "RobotFileError",
+    "SolverError",
+    "TaskError",
+    "UnknownFrameError",
+    "UnknownJointError",
+    "UnknownRobotError",
+    "UnsupportedJointError",
+    "load_robot",
+    "mount",
+    "mount_urdf",
+    "planar_base_urdf",
+    "robot_from_urdf",
+    "robot_index",
+]

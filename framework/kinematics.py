@@ -1,0 +1,211 @@
+"""Population forward kinematics: world poses of a set of frames for a whole population in one call.
+
+The kernel reads the Pinocchio model (joint placements, joint kinds and axes, frame placements), never DH
+tables, and composes ``oMi = oMparent · jointPlacement · M(x)`` exactly as ``pinocchio.forwardKinematics``
+and ``pinocchio.updateFramePlacements`` do. Only the joints on the paths from the root to the requested frames
+are visited. The loop over the population is compiled with numba (cached on disk, so the compile cost is paid
+once per machine, never per solve).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, NamedTuple
+
+import numba
+import numpy as np
+
+from .errors import ConfigurationError, UnknownFrameError
+from .robot import JointKind
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .robot import Robot
+
+_REVOLUTE, _PRISMATIC, _PLANAR = 0, 1, 2
+_KIND_CODE = {
+    JointKind.REVOLUTE: _REVOLUTE,
+    JointKind.CONTINUOUS: _REVOLUTE,
+    JointKind.PRISMATIC: _PRISMATIC,
+    JointKind.PLANAR: _PLANAR,
+}
+#: Populations at least this large use the multi-threaded kernel.
+PARALLEL_THRESHOLD = 512
+
+
+class FramePoses(NamedTuple):
+    """World poses of ``frames`` for a population.
+
+    Attributes:
+        frames: frame names, in the order of axis 1.
+        positions: ``(pop, k, 3)`` frame origins in the world frame [m].
+        rotations: ``(pop, k, 3, 3)`` world-from-frame rotation matrices.
+    """
+
+    frames: tuple[str, ...]
+    positions: np.ndarray
+    rotations: np.ndarray
+
+    def _index(self, frame: str) -> int:
+        try:
+            return self.frames.index(frame)
+        except ValueError:
+            raise UnknownFrameError(f"frame {frame!r} was not computed; computed: {list(self.frames)}") from None
+
+    def position(self, frame: str) -> np.ndarray:
+        """``(pop, 3)`` world position of one frame [m]."""
+        return self.positions[:, self._index(frame)]
+
+    def rotation(self, frame: str) -> np.ndarray:
+        """``(pop, 3, 3)`` world rotation of one frame."""
+        return self.rotations[:, self._index(frame)]
+
+
+class PopulationKinematics:
+    """Compiled forward kinematics of one robot for one tuple of frames: ``(pop, n) -> FramePoses``.
+
+    The model is flattened into two tables the kernel walks: per visited joint ``[parent slot, kind code,
+    first coordinate]`` and ``[placement rotation (9, row-major), placement translation (3), axis (3)]``;
+    per frame its joint slot and ``[rotation (9), translation (3)]`` in that joint.
+    """
+
+    def __init__(self, robot: Robot, frames: tuple[str, ...]):
+        model = robot.model
+        frame_ids = [robot.frame_id(f) for f in frames]
+        by_pin_id = {j.pin_id: j for j in robot.joints}
+
+        # Joints on the root paths of the requested frames, in Pinocchio (topological) order.
+        needed: set[int] = set()
+        for fid in frame_ids:
+            jid = model.frames[fid].parentJoint
+            while jid > 0 and jid not in needed:
+                needed.add(jid)
+                jid = model.parents[jid]
+        order = [0, *sorted(needed)]
+        slot = {jid: i for i, jid in enumerate(order)}
+
+        self._joint_int = np.zeros((len(order), 3), dtype=np.int64)
+        self._joint_geo = np.zeros((len(order), 15))
+        for i, jid in enumerate(order[1:], start=1):
+            joint = by_pin_id[jid]
+            placement = model.jointPlacements[jid]
+            self._joint_int[i] = slot[model.parents[jid]], _KIND_CODE[joint.kind], joint.index
+            self._joint_geo[i] = np.concatenate([placement.rotation.ravel(), placement.translation, joint.axis])
+        self._frame_slot = np.array([slot[model.frames[f].parentJoint] for f in frame_ids], dtype=np.int64)
+        self._frame_geo = np.array(
+            [np.concatenate([model.frames[f].placement.rotation.ravel(), model.frames[f].placement.translation])
+             for f in frame_ids]
+        ).reshape(-1, 12)
+        self.frames = frames
+
+    def __call__(self, X: np.ndarray) -> FramePoses:
+        """Poses for a population ``X`` of shape ``(pop, n)`` (float64); NaN/inf rows raise ConfigurationError."""
+        pop, k = X.shape[0], len(self.frames)
+        out = np.empty((pop, k, 12))
+        if pop >= PARALLEL_THRESHOLD:
+            bad = _fk_parallel(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, _threads())
+        else:
+            bad = _fk_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out)
+        if bad >= 0:
+            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3))
+
+
+def _threads() -> int:
+    return numba.get_num_threads()
+
+
+@numba.njit(cache=True, inline="always")
+def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
+    """Forward kinematics of one configuration ``x`` into ``out (k, 12)``.
+
+    ``out`` rows hold the rotation row-major, then the position.
+
+    ``W (m, 12)`` is scratch holding each visited joint's world placement in the same layout.
+    """
+    for c in range(12):
+        W[0, c] = 0.0
+    W[0, 0] = W[0, 4] = W[0, 8] = 1.0
+    for j in range(1, jint.shape[0]):
+        P, kind, i = jint[j, 0], jint[j, 1], jint[j, 2]
+        g = jgeo[j]
+        w = W[P]
+        # A = R_P · R_placement, a = R_P · t_placement + p_P
+        a00 = w[0] * g[0] + w[1] * g[3] + w[2] * g[6]
+        a01 = w[0] * g[1] + w[1] * g[4] + w[2] * g[7]
+        a02 = w[0] * g[2] + w[1] * g[5] + w[2] * g[8]
+        a10 = w[3] * g[0] + w[4] * g[3] + w[5] * g[6]
+        a11 = w[3] * g[1] + w[4] * g[4] + w[5] * g[7]
+        a12 = w[3] * g[2] + w[4] * g[5] + w[5] * g[8]
+        a20 = w[6] * g[0] + w[7] * g[3] + w[8] * g[6]
+        a21 = w[6] * g[1] + w[7] * g[4] + w[8] * g[7]
+        a22 = w[6] * g[2] + w[7] * g[5] + w[8] * g[8]
+        px = w[0] * g[9] + w[1] * g[10] + w[2] * g[11] + w[9]
+        py = w[3] * g[9] + w[4] * g[10] + w[5] * g[11] + w[10]
+        pz = w[6] * g[9] + w[7] * g[10] + w[8] * g[11] + w[11]
+        o = W[j]
+        if kind == 1:  # prismatic: translate along the axis
+            q = x[i]
+            ux, uy, uz = g[12] * q, g[13] * q, g[14] * q
+            o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], o[8] = a00, a01, a02, a10, a11, a12, a20, a21, a22
+            o[9] = px + a00 * ux + a01 * uy + a02 * uz
+            o[10] = py + a10 * ux + a11 * uy + a12 * uz
+            o[11] = pz + a20 * ux + a21 * uy + a22 * uz
+            continue
+        if kind == 0:  # revolute: Rodrigues, M = c I + s [u]x + (1 - c) u uᵀ
+            c, s = np.cos(x[i]), np.sin(x[i])
+            ux, uy, uz = g[12], g[13], g[14]
+            v = 1.0 - c
+            m00, m01, m02 = c + v * ux * ux, v * ux * uy - s * uz, v * ux * uz + s * uy
+            m10, m11, m12 = v * uy * ux + s * uz, c + v * uy * uy, v * uy * uz - s * ux
+            m20, m21, m22 = v * uz * ux - s * uy, v * uz * uy + s * ux, c + v * uz * uz
+        else:  # planar: translate (x, y, 0) in the joint frame, rotate about z
+            tx, ty = x[i], x[i + 1]
+            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+            px += a00 * tx + a01 * ty
+            py += a10 * tx + a11 * ty
+            pz += a20 * tx + a21 * ty
+            m00, m01, m02, m10, m11, m12, m20, m21, m22 = c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0
+        o[0] = a00 * m00 + a01 * m10 + a02 * m20
+        o[1] = a00 * m01 + a01 * m11 + a02 * m21
+        o[2] = a00 * m02 + a01 * m12 + a02 * m22
+        o[3] = a10 * m00 + a11 * m10 + a12 * m20
+        o[4] = a10 * m01 + a11 * m11 + a12 * m21
+        o[5] = a10 * m02 + a11 * m12 + a12 * m22
+        o[6] = a20 * m00 + a21 * m10 + a22 * m20
+        o[7] = a20 * m01 + a21 * m11 + a22 * m21
+        o[8] = a20 * m02 + a21 * m12 + a22 * m22
+        o[9], o[10], o[11] = px, py, pz
+    for f in range(fslot.shape[0]):
+        w = W[fslot[f]]
+        g = fgeo[f]
+        o = out[f]
+        for r in range(3):
+            o[3 * r] = w[3 * r] * g[0] + w[3 * r + 1] * g[3] + w[3 * r + 2] * g[6]
+            o[3 * r + 1] = w[3 * r] * g[1] + w[3 * r + 1] * g[4] + w[3 * r + 2] * g[7]
+            o[3 * r + 2] = w[3 * r] * g[2] + w[3 * r + 1] * g[5] + w[3 * r + 2] * g[8]
+            o[9 + r] = w[3 * r] * g[9] + w[3 * r + 1] * g[10] + w[3 * r + 2] * g[11] + w[9 + r]
+
+
+@numba.njit(cache=True)
+def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
+    """FK of every row of ``X``; returns the first row holding NaN/inf, or -1."""
+    W = np.empty((jint.shape[0], 12))
+    for b in range(X.shape[0]):
+        if not np.all(np.isfinite(X[b])):
+            return b
+        _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
+    return -1
+
+
+@numba.njit(cache=True, parallel=True)
+def _fk_parallel(X, jint, jgeo, fslot, fgeo, out, chunks):
+    """FK of every row of ``X`` over ``chunks`` threads; returns a row holding NaN/inf, or -1."""
+    size = (X.shape[0] + chunks - 1) // chunks
+    bad = np.full(chunks, -1)
+    for t in numba.prange(chunks):  # one scratch buffer per chunk, not per configuration
+        W = np.empty((jint.shape[0], 12))
+        for b in range(t * size, min((t + 1) * size, X.shape[0])):
+            if not np.all(np.isfinite(X[b])):
+                bad[t] = b
+                break
+            _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
+    return bad.max()

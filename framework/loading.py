@@ -1,0 +1,251 @@
+"""Loading robots: from the shipped index by name, or from any URDF / xacro file or URDF text.
+
+``load_robot("youbot_dual_mobile")`` reads ``robots/index.toml``; ``load_robot("path/arm.urdf")`` or
+``load_robot("arm.urdf.xacro", xacro_args={"l1": "0.5"})`` reads a file nobody here wrote;
+:func:`robot_from_urdf` builds from URDF text (e.g. written in a notebook). Joints not chosen for the search
+(``joints=...``) are locked at their ``locked`` values (default: 0, or the centre of their limits if 0 is
+outside them) and folded into fixed placements by Pinocchio's ``buildReducedModel``.
+"""
+
+from __future__ import annotations
+
+import sys
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import RobotFileError, UnknownJointError, UnknownRobotError
+from .resources import data_dir
+from .robot import Robot, build_joints, default_bounds
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+def robot_index() -> dict[str, dict]:
+    """The shipped robots: name -> entry (``file``, ``description``, ``end_effectors``, ``groups``, ...)."""
+    path = data_dir("robots") / "index.toml"
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        raise RobotFileError(f"cannot read the robot index {path}: {err}") from err
+
+
+def load_robot(
+    source: str | Path,
+    *,
+    joints: Sequence[str] | None = None,
+    locked: Mapping[str, float] | None = None,
+    end_effectors: Sequence[str] | None = None,
+    groups: Mapping[str, Sequence[str]] | None = None,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
+    xacro_args: Mapping[str, str] | None = None,
+    unbounded_translation: float = 2.0,
+) -> Robot:
+    """Load a robot by index name or from a ``.urdf`` / ``.xacro`` file.
+
+    Args:
+        source: a name from ``robots/index.toml`` or a path to a URDF or xacro file.
+        joints: joints to solve for (default: every movable joint); the others are locked.
+        locked: values of locked joints in joint coordinates [rad or m] (default 0 or mid-range).
+        end_effectors: end-effector frame names (default: the index entry, else the tip of every leaf chain).
+        groups: joint-group name -> joint names (default: the index entry, else derived from the chains).
+        bounds: search bounds to override, coordinate or joint name -> (lower, upper).
+        xacro_args: xacro arguments, for ``.xacro`` files.
+        unbounded_translation: half-width [m] of the search box of unbounded translations (planar bases).
+    """
+    path, entry = resolve_robot(source)
+    name = str(source) if entry else path.name.split(".")[0]
+    text = read_robot_file(path, xacro_args=xacro_args)
+    return robot_from_urdf(
+        text,
+        name=name,
+        joints=joints,
+        locked=locked,
+        end_effectors=end_effectors if end_effectors is not None else entry.get("end_effectors"),
+        groups=groups if groups is not None else entry.get("groups"),
+        bounds=bounds,
+        unbounded_translation=unbounded_translation,
+        source=str(path),
+    )
+
+
+def resolve_robot(source: str | Path) -> tuple[Path, Mapping]:
+    """The file of a robot given by index name or path, and its index entry (empty for a plain file)."""
+    path = Path(source)
+    if path.is_file():
+        return path, {}
+    index = robot_index()
+    if str(source) in index:
+        return data_dir("robots") / index[str(source)]["file"], index[str(source)]
+    if path.suffix:
+        raise RobotFileError(f"robot file {path} does not exist")
+    raise UnknownRobotError(
+        f"unknown robot {str(source)!r}: not in the robot index ({', '.join(sorted(index))}) and not a file path"
+    )
+
+
+def read_robot_file(path: Path, *, xacro_args: Mapping[str, str] | None = None) -> str:
+    """URDF text of a ``.urdf`` file or an expanded ``.xacro`` file."""
+    path = Path(path)
+    if not path.is_file():
+        raise RobotFileError(f"robot file {path} does not exist")
+    if path.suffix == ".xacro":
+        import xacro
+
+        try:
+            doc = xacro.process_file(str(path), mappings={k: str(v) for k, v in (xacro_args or {}).items()})
+        except Exception as err:  # xacro raises its own XacroException, but also NameError, KeyError, ...
+            raise RobotFileError(f"xacro failed on {path}: {err}") from err
+        return doc.toprettyxml(indent="  ")
+    if xacro_args:
+        raise RobotFileError(f"xacro arguments given for {path}, which is not a .xacro file")
+    try:
+        return path.read_text()
+    except (OSError, UnicodeDecodeError) as err:
+        raise RobotFileError(f"cannot read robot file {path}: {err}") from err
+
+
+def parse_urdf(text: str, what: str = "URDF") -> ET.Element:
+    """The ``<robot>`` element of URDF text; raises :class:`RobotFileError` on malformed XML."""
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as err:
+        raise RobotFileError(f"malformed XML in {what}: {err}") from err
+    if root.tag != "robot":
+        raise RobotFileError(f"{what} is not a URDF: root element is <{root.tag}>, expected <robot>")
+    if root.find("link") is None:
+        raise RobotFileError(f"{what} has no <link>")
+    return root
+
+
+def robot_from_urdf(
+    text: str,
+    *,
+    name: str | None = None,
+    joints: Sequence[str] | None = None,
+    locked: Mapping[str, float] | None = None,
+    end_effectors: Sequence[str] | None = None,
+    groups: Mapping[str, Sequence[str]] | None = None,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
+    unbounded_translation: float = 2.0,
+    source: str | None = None,
+) -> Robot:
+    """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot`."""
+    what = source or "URDF text"
+    root = parse_urdf(text, what)
+    name = name or root.get("name") or "robot"
+    try:
+        full = pin.buildModelFromXML(text)
+    except Exception as err:  # Pinocchio raises ValueError / RuntimeError on inconsistent trees
+        raise RobotFileError(f"Pinocchio cannot build a model from {what}: {err}") from err
+
+    model, locked_values = _reduce(full, joints, locked or {})
+    robot_joints = build_joints(model)
+    lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
+    if end_effectors is None:
+        end_effectors = _leaf_frames(model)
+    robot = Robot(
+        name=name,
+        model=model,
+        joints=robot_joints,
+        lower=lower,
+        upper=upper,
+        end_effectors=tuple(end_effectors),
+        groups={},
+        urdf=text,
+        locked=locked_values,
+        source=source,
+    )
+    robot = _with_groups(robot, groups)
+    return robot.with_bounds(bounds) if bounds else robot
+
+
+def _reduce(
+    full: pin.Model, joints: Sequence[str] | None, locked: Mapping[str, float]
+) -> tuple[pin.Model, dict[str, float]]:
+    """Lock every joint not in ``joints`` (and every joint in ``locked``) with Pinocchio's reduced model."""
+    names = list(full.names)[1:]
+    for joint in [*(joints or []), *locked]:
+        if joint not in names:
+            raise UnknownJointError(f"the model has no joint {joint!r}; joints: {', '.join(names)}")
+    keep = set(names if joints is None else joints) - set(locked)
+    to_lock = [n for n in names if n not in keep]
+    if not to_lock:
+        return full, {}
+    q_ref = pin.neutral(full)
+    values: dict[str, float] = {}
+    for joint_name in to_lock:
+        jid = full.getJointId(joint_name)
+        jm = full.joints[jid]
+        k, lo, hi = jm.idx_q, full.lowerPositionLimit[jm.idx_q], full.upperPositionLimit[jm.idx_q]
+        if joint_name in locked:
+            value = float(locked[joint_name])
+        else:
+            value = 0.0 if (jm.nq != 1 or lo <= 0.0 <= hi) else 0.5 * (lo + hi)
+        if jm.nq == 1:
+            q_ref[k] = value
+        elif jm.nq == 2:  # continuous: (cos, sin)
+            q_ref[k : k + 2] = np.cos(value), np.sin(value)
+        elif joint_name in locked:
+            raise UnknownJointError(f"joint {joint_name!r} has {jm.nq} coordinates; lock it at its neutral value")
+        values[joint_name] = value
+    ids = [full.getJointId(n) for n in to_lock]
+    return pin.buildReducedModel(full, ids, q_ref), values
+
+
+def _leaf_frames(model: pin.Model) -> list[str]:
+    """Default end-effectors: for each joint with no child joint, the last body frame attached to it."""
+    has_child = {model.parents[j] for j in range(1, model.njoints)}
+    leaves = []
+    for jid in range(1, model.njoints):
+        if jid in has_child:
+            continue
+        bodies = [f.name for f in model.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY]
+        if bodies:
+            leaves.append(bodies[-1])
+    return leaves
+
+
+def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None) -> Robot:
+    """Attach joint groups: given by name lists, or derived from the end-effector chains.
+
+    Derived groups: joints shared by every end-effector chain form ``"base"`` (when there are several
+    end-effectors); each chain's remaining joints form a group named after its end-effector frame.
+    """
+    from dataclasses import replace
+
+    result: dict[str, np.ndarray] = {}
+    solved = set(robot.joint_names)
+    if groups:
+        for group, members in groups.items():
+            kept = [m for m in members if m in solved]
+            if kept:
+                result[group] = _coords(robot, kept)
+    else:
+        model = robot.model
+        chains = []
+        for frame in robot.end_effectors:
+            jid, chain = model.frames[robot.frame_id(frame)].parentJoint, []
+            while jid > 0:
+                chain.append(model.names[jid])
+                jid = model.parents[jid]
+            chains.append(chain[::-1])
+        shared = set.intersection(*map(set, chains)) if len(chains) > 1 else set()
+        if shared:
+            result["base"] = _coords(robot, [j for j in chains[0] if j in shared])
+        for frame, chain in zip(robot.end_effectors, chains):
+            own = [j for j in chain if j not in shared]
+            if own:
+                result[frame] = _coords(robot, own)
+    return replace(robot, groups=result)
+
+
+def _coords(robot: Robot, joint_names: Sequence[str]) -> np.ndarray:
+    return np.concatenate([np.asarray(robot.joint(j).coordinates) for j in joint_names]).astype(int)

@@ -1,0 +1,381 @@
+"""The robot model: a Pinocchio model of the solved joints, its search space, frames and joint groups.
+
+Solvers work in *joint coordinates* ``x`` (shape ``(n,)``, a population ``X`` is ``(pop, n)``): one angle [rad]
+per revolute or continuous joint, one displacement [m] per prismatic joint, and ``(x [m], y [m], θ [rad])`` per
+planar joint. Pinocchio stores continuous and planar joints with ``(cos θ, sin θ)``, so its configuration ``q``
+has ``nq >= n`` entries. Every conversion between the two lives in this module: :meth:`Robot.to_pinocchio`,
+:meth:`Robot.from_pinocchio` and :meth:`Robot.coordinate_jacobian`.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import ConfigurationError, LimitsError, UnknownFrameError, UnknownJointError, UnsupportedJointError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .kinematics import FramePoses
+
+#: Limits beyond this magnitude are treated as "no limit" (URDF continuous joints, planar bases).
+UNBOUNDED = 1e10
+
+
+class JointKind(str, enum.Enum):
+    """How a joint moves, and how many search coordinates it has."""
+
+    REVOLUTE = "revolute"  # 1 angle [rad], bounded
+    CONTINUOUS = "continuous"  # 1 angle [rad], unbounded (Pinocchio stores cos, sin)
+    PRISMATIC = "prismatic"  # 1 displacement [m]
+    PLANAR = "planar"  # x [m], y [m], θ [rad] in the parent's xy-plane (Pinocchio stores x, y, cos, sin)
+
+    @property
+    def width(self) -> int:
+        """Number of search coordinates of one joint of this kind."""
+        return 3 if self is JointKind.PLANAR else 1
+
+
+_KIND_BY_PINOCCHIO = {
+    "JointModelRX": JointKind.REVOLUTE,
+    "JointModelRY": JointKind.REVOLUTE,
+    "JointModelRZ": JointKind.REVOLUTE,
+    "JointModelRevoluteUnaligned": JointKind.REVOLUTE,
+    "JointModelRUBX": JointKind.CONTINUOUS,
+    "JointModelRUBY": JointKind.CONTINUOUS,
+    "JointModelRUBZ": JointKind.CONTINUOUS,
+    "JointModelRevoluteUnboundedUnaligned": JointKind.CONTINUOUS,
+    "JointModelPX": JointKind.PRISMATIC,
+    "JointModelPY": JointKind.PRISMATIC,
+    "JointModelPZ": JointKind.PRISMATIC,
+    "JointModelPrismaticUnaligned": JointKind.PRISMATIC,
+    "JointModelPlanar": JointKind.PLANAR,
+}
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+
+
+def joint_kind_and_axis(joint: pin.JointModel) -> tuple[JointKind, np.ndarray]:
+    """Kind and unit axis (in the joint frame; ``z`` for planar) of a Pinocchio joint model."""
+    short = joint.shortname()
+    if short not in _KIND_BY_PINOCCHIO:
+        raise UnsupportedJointError(
+            f"joint type {short} cannot be searched over; lock it (load_robot(..., locked={{name: value}}))"
+        )
+    kind = _KIND_BY_PINOCCHIO[short]
+    if kind is JointKind.PLANAR:
+        return kind, np.array([0.0, 0.0, 1.0])
+    if short.endswith("Unaligned"):
+        concrete = joint.extract() if hasattr(joint, "extract") else joint
+        axis = np.asarray(concrete.axis, dtype=float).copy()
+        return kind, axis / np.linalg.norm(axis)
+    return kind, np.array(_AXES[short[-1]])
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One solved joint: its name, kind, slice of the search vector and Pinocchio indices."""
+
+    name: str
+    kind: JointKind
+    index: int  # first search coordinate
+    pin_id: int  # joint index in the Pinocchio model
+    idx_q: int  # first entry in Pinocchio's q
+    idx_v: int  # first entry in Pinocchio's v
+    axis: np.ndarray = field(repr=False)  # (3,) unit axis in the joint frame
+
+    @property
+    def width(self) -> int:
+        return self.kind.width
+
+    @property
+    def coordinates(self) -> range:
+        """Indices of this joint's coordinates in the search vector."""
+        return range(self.index, self.index + self.width)
+
+
+def _coordinate_names(joint: Joint) -> list[str]:
+    if joint.kind is JointKind.PLANAR:
+        return [f"{joint.name}.x", f"{joint.name}.y", f"{joint.name}.theta"]
+    return [joint.name]
+
+
+@dataclass(frozen=True, eq=False)
+class Robot:
+    """A robot as solvers see it. Build it with :func:`framework.load_robot` or :func:`framework.mount`.
+
+    Attributes:
+        name: robot name (index key or file stem).
+        model: Pinocchio model holding exactly the solved joints (others locked into fixed placements).
+        joints: the solved joints in Pinocchio order.
+        lower, upper: search bounds, shape ``(n,)``, in joint coordinates [rad or m].
+        end_effectors: names of the end-effector frames (first is the default).
+        groups: joint-group name -> indices into the search vector (e.g. ``"base"``, ``"arm1"``).
+        urdf: the URDF text the model was built from (for viewers and recordings), with locked joints kept.
+        locked: locked joint name -> value in joint coordinates.
+    """
+
+    name: str
+    model: pin.Model = field(repr=False)
+    joints: tuple[Joint, ...]
+    lower: np.ndarray = field(repr=False)
+    upper: np.ndarray = field(repr=False)
+    end_effectors: tuple[str, ...]
+    groups: Mapping[str, np.ndarray] = field(repr=False)
+    urdf: str | None = field(default=None, repr=False)
+    locked: Mapping[str, float] = field(default_factory=dict, repr=False)
+    source: str | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        lower = np.asarray(self.lower, dtype=float)
+        upper = np.asarray(self.upper, dtype=float)
+        object.__setattr__(self, "lower", lower)
+        object.__setattr__(self, "upper", upper)
+        check_bounds(lower, upper, self.coordinate_names)
+        lower.flags.writeable = False
+        upper.flags.writeable = False
+        for frame in self.end_effectors:
+            self.frame_id(frame)
+        for name, indices in self.groups.items():
+            indices = np.asarray(indices, dtype=int)
+            if indices.size and (indices.min() < 0 or indices.max() >= self.n):
+                raise UnknownJointError(f"group {name!r} addresses coordinates outside 0..{self.n - 1}")
+
+    # ------------------------------------------------------------------ sizes and names
+    @cached_property
+    def n(self) -> int:
+        """Dimension of the search space (number of joint coordinates)."""
+        return sum(j.width for j in self.joints)
+
+    @cached_property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """Name of each search coordinate (joint name; ``joint.x``/``.y``/``.theta`` for planar joints)."""
+        return tuple(name for j in self.joints for name in _coordinate_names(j))
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(j.name for j in self.joints)
+
+    @cached_property
+    def frame_names(self) -> tuple[str, ...]:
+        return tuple(f.name for f in self.model.frames)
+
+    def frame_id(self, frame: str) -> int:
+        """Pinocchio index of a frame; raises :class:`UnknownFrameError` naming close matches."""
+        if not isinstance(frame, str) or not self.model.existFrame(frame):
+            raise UnknownFrameError(f"robot {self.name!r} has no frame {frame!r}{_suggest(frame, self.frame_names)}")
+        return self.model.getFrameId(frame)
+
+    def joint(self, name: str) -> Joint:
+        for joint in self.joints:
+            if joint.name == name:
+                return joint
+        raise UnknownJointError(
+            f"robot {self.name!r} has no solved joint {name!r}{_suggest(name, self.joint_names)}"
+        )
+
+    def group(self, name: str) -> np.ndarray:
+        """Search-vector indices of a joint group (``"base"``, ``"arm1"``, ... or ``"all"``) or one joint."""
+        if name == "all":
+            return np.arange(self.n)
+        if name in self.groups:
+            return np.asarray(self.groups[name], dtype=int)
+        if name in self.joint_names:
+            return np.asarray(self.joint(name).coordinates, dtype=int)
+        known = ["all", *self.groups, *self.joint_names]
+        raise UnknownJointError(f"robot {self.name!r} has no joint group {name!r}{_suggest(name, known)}")
+
+    # ------------------------------------------------------------------ bounds
+    @property
+    def middle(self) -> np.ndarray:
+        """Centre of the search box, shape ``(n,)``."""
+        return 0.5 * (self.lower + self.upper)
+
+    def with_bounds(self, bounds: Mapping[str, tuple[float, float]]) -> Robot:
+        """A copy with new search bounds for some coordinates (by coordinate or joint name)."""
+        lower, upper = self.lower.copy(), self.upper.copy()
+        for name, (lo, hi) in bounds.items():
+            if name in self.coordinate_names:
+                idx = [self.coordinate_names.index(name)]
+            else:
+                idx = list(self.joint(name).coordinates)
+            lower[idx], upper[idx] = lo, hi
+        return replace(self, lower=lower, upper=upper)
+
+    def random_configurations(self, rng: np.random.Generator, count: int) -> np.ndarray:
+        """Uniform samples in the search box, shape ``(count, n)``."""
+        return self.lower + (self.upper - self.lower) * rng.random((count, self.n))
+
+    # ------------------------------------------------------------------ validation
+    def check_population(self, X: np.ndarray, what: str = "configuration", *, finite: bool = True) -> np.ndarray:
+        """``X`` as a C-contiguous float array ``(pop, n)``; accepts ``(n,)``. Raises on shape or NaN/inf.
+
+        ``finite=False`` skips the NaN/inf scan, for callers that check it themselves (the FK kernel does).
+        """
+        X = np.ascontiguousarray(X, dtype=float)
+        if X.ndim == 1:
+            X = X[None, :]
+        if X.ndim != 2 or X.shape[1] != self.n:
+            raise ConfigurationError(
+                f"{what} must have shape (pop, {self.n}) or ({self.n},) for robot {self.name!r} "
+                f"(coordinates {', '.join(self.coordinate_names)}); got {np.shape(X)}"
+            )
+        if finite and not np.isfinite(X).all():
+            rows = np.unique(np.nonzero(~np.isfinite(X))[0])
+            raise ConfigurationError(f"{what} holds NaN or inf (rows {rows[:5].tolist()})")
+        return X
+
+    # ------------------------------------------------------------------ conversions (the only place)
+    def to_pinocchio(self, X: np.ndarray) -> np.ndarray:
+        """Pinocchio configurations ``q`` for joint coordinates; ``(n,) -> (nq,)``, ``(pop, n) -> (pop, nq)``."""
+        single = np.ndim(X) == 1
+        X = self.check_population(X)
+        Q = np.empty((X.shape[0], self.model.nq))
+        for j in self.joints:
+            i, k = j.index, j.idx_q
+            if j.kind is JointKind.CONTINUOUS:
+                Q[:, k], Q[:, k + 1] = np.cos(X[:, i]), np.sin(X[:, i])
+            elif j.kind is JointKind.PLANAR:
+                Q[:, k : k + 2] = X[:, i : i + 2]
+                Q[:, k + 2], Q[:, k + 3] = np.cos(X[:, i + 2]), np.sin(X[:, i + 2])
+            else:
+                Q[:, k] = X[:, i]
+        return Q[0] if single else Q
+
+    def from_pinocchio(self, Q: np.ndarray) -> np.ndarray:
+        """Joint coordinates for Pinocchio configurations; ``(nq,) -> (n,)``, ``(pop, nq) -> (pop, n)``."""
+        Q = np.asarray(Q, dtype=float)
+        single = Q.ndim == 1
+        Q = np.atleast_2d(Q)
+        if Q.shape[1] != self.model.nq:
+            raise ConfigurationError(f"Pinocchio configuration must have {self.model.nq} entries; got {Q.shape}")
+        X = np.empty((Q.shape[0], self.n))
+        for j in self.joints:
+            i, k = j.index, j.idx_q
+            if j.kind is JointKind.CONTINUOUS:
+                X[:, i] = np.arctan2(Q[:, k + 1], Q[:, k])
+            elif j.kind is JointKind.PLANAR:
+                X[:, i : i + 2] = Q[:, k : k + 2]
+                X[:, i + 2] = np.arctan2(Q[:, k + 3], Q[:, k + 2])
+            else:
+                X[:, i] = Q[:, k]
+        return X[0] if single else X
+
+    def coordinate_jacobian(self, x: np.ndarray) -> np.ndarray:
+        """``dv/dx`` at ``x``: maps joint-coordinate rates to Pinocchio velocities, shape ``(nv, n)``.
+
+        Identity except for planar joints, whose Pinocchio velocity is expressed in the moving joint frame:
+        ``(v_x, v_y) = R(θ)ᵀ (ẋ, ẏ)``, ``ω = θ̇``. A Pinocchio Jacobian ``J`` (``6 × nv``) becomes ``J @ dv/dx``.
+        """
+        x = self.check_population(x)[0]
+        T = np.zeros((self.model.nv, self.n))
+        for j in self.joints:
+            i, k = j.index, j.idx_v
+            if j.kind is JointKind.PLANAR:
+                c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+                T[k : k + 2, i : i + 2] = [[c, s], [-s, c]]
+                T[k + 2, i + 2] = 1.0
+            else:
+                T[k, i] = 1.0
+        return T
+
+    # ------------------------------------------------------------------ kinematics
+    def frame_poses(self, X: np.ndarray, frames: Sequence[str] | str | None = None) -> FramePoses:
+        """World poses of ``frames`` (default: the end-effectors) for a population ``X`` ``(pop, n)``.
+
+        The single entry point of costs and solvers; see :mod:`framework.kinematics`.
+        """
+        if frames is None:
+            frames = self.end_effectors
+        elif isinstance(frames, str):
+            frames = (frames,)
+        return self._kinematics(tuple(frames))(self.check_population(X, finite=False))
+
+    def _kinematics(self, frames: tuple[str, ...]):
+        cache = self.__dict__.setdefault("_programs", {})
+        if frames not in cache:
+            from .kinematics import PopulationKinematics
+
+            cache[frames] = PopulationKinematics(self, frames)
+        return cache[frames]
+
+    def frame_placement(self, x: np.ndarray, frame: str) -> pin.SE3:
+        """World placement of one frame at one configuration, computed by Pinocchio (reference path)."""
+        data = self.model.createData()
+        pin.framesForwardKinematics(self.model, data, self.to_pinocchio(self.check_population(x)[0]))
+        return data.oMf[self.frame_id(frame)].copy()
+
+    def __repr__(self) -> str:
+        groups = ", ".join(f"{k}:{len(v)}" for k, v in self.groups.items())
+        return (
+            f"Robot({self.name!r}, n={self.n}, end_effectors={list(self.end_effectors)}, groups=[{groups}])"
+        )
+
+
+def check_bounds(lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> None:
+    """Raise :class:`LimitsError` unless ``lower < upper`` elementwise, both finite, shape ``(len(names),)``."""
+    if lower.shape != (len(names),) or upper.shape != (len(names),):
+        raise LimitsError(f"bounds must have shape ({len(names)},); got {lower.shape} and {upper.shape}")
+    for i, name in enumerate(names):
+        lo, hi = lower[i], upper[i]
+        if not (np.isfinite(lo) and np.isfinite(hi)):
+            raise LimitsError(f"search bounds of {name!r} are not finite ({lo}, {hi}); set them explicitly")
+        if not lo < hi:
+            raise LimitsError(
+                f"search bounds of {name!r} are inverted or empty: lower {lo} >= upper {hi}"
+                + ("; lock the joint instead" if lo == hi else "")
+            )
+
+
+def build_joints(model: pin.Model) -> tuple[Joint, ...]:
+    """The movable joints of a Pinocchio model in model order, with their search-vector offsets."""
+    joints, index = [], 0
+    for jid in range(1, model.njoints):
+        jm = model.joints[jid]
+        try:
+            kind, axis = joint_kind_and_axis(jm)
+        except UnsupportedJointError as err:
+            raise UnsupportedJointError(f"joint {model.names[jid]!r}: {err}") from None
+        joints.append(Joint(model.names[jid], kind, index, jid, jm.idx_q, jm.idx_v, axis))
+        index += kind.width
+    return tuple(joints)
+
+
+def default_bounds(
+    model: pin.Model, joints: Iterable[Joint], *, translation: float = 2.0, angle: float = np.pi
+) -> tuple[np.ndarray, np.ndarray]:
+    """Search bounds from the model's limits; unbounded coordinates get ``±translation`` [m] or ``±angle`` [rad]."""
+    lower, upper = [], []
+    for j in joints:
+        if j.kind is JointKind.CONTINUOUS:
+            lower.append(-angle)
+            upper.append(angle)
+        elif j.kind is JointKind.PLANAR:
+            k = j.idx_q
+            for axis in range(2):
+                lo, hi = model.lowerPositionLimit[k + axis], model.upperPositionLimit[k + axis]
+                bounded = abs(lo) < UNBOUNDED and abs(hi) < UNBOUNDED
+                lower.append(lo if bounded else -translation)
+                upper.append(hi if bounded else translation)
+            lower.append(-angle)
+            upper.append(angle)
+        else:
+            lo, hi = model.lowerPositionLimit[j.idx_q], model.upperPositionLimit[j.idx_q]
+            span = translation if j.kind is JointKind.PRISMATIC else angle
+            lower.append(lo if abs(lo) < UNBOUNDED else -span)
+            upper.append(hi if abs(hi) < UNBOUNDED else span)
+    return np.array(lower, dtype=float), np.array(upper, dtype=float)
+
+
+def _suggest(name: object, known: Sequence[str]) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(str(name), list(known), n=3)
+    if close:
+        return f"; did you mean {', '.join(map(repr, close))}?"
+    shown = ", ".join(map(repr, list(known)[:12]))
+    return f"; known: {shown}{', ...' if len(known) > 12 else ''}"

@@ -1,0 +1,31 @@
+"""Shared fixtures: URDFs shipped by PyPI packages (example-robot-data), if installed."""
+
+from __future__ import annotations
+
+import sysconfig
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+
+def example_robot_data_dir() -> Path | None:
+    """``share/example-robot-data/robots`` of the installed ``example-robot-data`` wheel, or None."""
+    for key in ("purelib", "platlib"):
+        path = Path(sysconfig.get_paths()[key]) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+        if path.is_dir():
+            return path
+    return None
+
+
+@pytest.fixture(scope="session")
+def erd() -> Path:
+    path = example_robot_data_dir()
+    if path is None:
+        pytest.fail("example-robot-data is a test dependency (pip install -e .[test]); it is not installed")
+    return path
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(20261123)
