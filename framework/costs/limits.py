@@ -1,0 +1,46 @@
+"""Penalty on joint-limit violations (paper 001): ``δ · Σ (max(0, l − x) + max(0, x − u))``."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import TaskError
+from ..kinematics import FramePoses
+from ..robot import Robot, check_bounds
+from .base import Term
+
+
+class JointLimitPenalty(Term):
+    """Sum of limit violations [rad or m] times ``weight`` (δ, large: 1e3 by default).
+
+    Limits default to the robot's search bounds; pass ``lower``/``upper`` ``(n,)`` for others. Zero inside.
+    """
+
+    def __init__(
+        self,
+        weight: float = 1e3,
+        *,
+        lower: Sequence[float] | None = None,
+        upper: Sequence[float] | None = None,
+        name: str = "joint_limits",
+    ):
+        if not np.isfinite(weight) or weight < 0:
+            raise TaskError(f"joint-limit penalty weight must be finite and >= 0; got {weight!r}")
+        self.weight, self.name = float(weight), name
+        self.lower = None if lower is None else np.asarray(lower, dtype=float)
+        self.upper = None if upper is None else np.asarray(upper, dtype=float)
+
+    def limits(self, robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+        lower = robot.lower if self.lower is None else self.lower
+        upper = robot.upper if self.upper is None else self.upper
+        return lower, upper
+
+    def validate(self, robot: Robot) -> None:
+        check_bounds(*self.limits(robot), robot.coordinate_names)
+
+    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
+        lower, upper = self.limits(robot)
+        violation = np.maximum(0.0, lower - X) + np.maximum(0.0, X - upper)
+        return self.weight * violation.sum(axis=-1)

@@ -1,0 +1,112 @@
+"""An IK problem: a robot, a weighted objective over its joint coordinates, and how to treat the box.
+
+``Problem.cost(X)`` is what solvers minimize: one population forward-kinematics call for every frame the
+terms need, then the weighted sum. ``Problem.evaluate(X)`` reports every term separately.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .costs import JointLimitPenalty, Objective, Term
+from .errors import TaskError
+from .robot import Robot
+
+BOUNDS = ("resample", "clip", "penalty")
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """Per-term values of a population.
+
+    Attributes:
+        names: term labels, in objective order.
+        weights: ``(k,)`` term weights.
+        values: ``(pop, k)`` unweighted term values.
+        cost: ``(pop,)`` the objective ``values @ weights``.
+        task_error: ``(pop,)`` sum of the unweighted task terms (position, orientation, relative).
+    """
+
+    names: tuple[str, ...]
+    weights: np.ndarray
+    values: np.ndarray
+    cost: np.ndarray
+    task_error: np.ndarray
+
+    def term(self, name: str) -> np.ndarray:
+        """``(pop,)`` unweighted values of one term."""
+        return self.values[:, self.names.index(name)]
+
+    def as_dict(self, member: int = 0) -> dict[str, float]:
+        """Unweighted term values of one member, by name."""
+        return {n: float(v) for n, v in zip(self.names, self.values[member])}
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """Minimize ``objective`` over the robot's joint coordinates within its search box.
+
+    Args:
+        robot: the robot (its ``lower``/``upper`` are the search box).
+        objective: weighted terms (a single :class:`Term` is accepted).
+        bounds: out-of-box candidates are ``"resample"``-d uniformly (paper 000 eq. 12), ``"clip"``-ped, or
+            left to a ``"penalty"`` (a :class:`JointLimitPenalty` is appended if the objective has none).
+    """
+
+    robot: Robot
+    objective: Objective
+    bounds: str = "resample"
+
+    def __post_init__(self) -> None:
+        objective = self.objective
+        if isinstance(objective, Term):
+            objective = Objective(((1.0, objective),))
+        if not isinstance(objective, Objective) or len(objective) == 0:
+            raise TaskError("a problem needs an objective of at least one cost term")
+        if self.bounds not in BOUNDS:
+            raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")
+        if self.bounds == "penalty" and not any(isinstance(t, JointLimitPenalty) for _, t in objective):
+            objective = objective + JointLimitPenalty()
+        for _, term in objective:
+            term.validate(self.robot)
+        object.__setattr__(self, "objective", objective)
+
+    @property
+    def n(self) -> int:
+        return self.robot.n
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return self.objective.names
+
+    @property
+    def weights(self) -> np.ndarray:
+        return np.array([w for w, _ in self.objective])
+
+    @property
+    def task_mask(self) -> np.ndarray:
+        return np.array([t.is_task for _, t in self.objective])
+
+    @property
+    def repair_mode(self) -> str:
+        """Bounds mode for the optimizer loop (``"none"`` when a penalty term handles the box)."""
+        return "none" if self.bounds == "penalty" else self.bounds
+
+    def values(self, X: np.ndarray) -> np.ndarray:
+        """``(pop, k)`` unweighted term values for a population ``X`` ``(pop, n)``."""
+        X = self.robot.check_population(X)
+        poses = self.robot.frame_poses(X, self.objective.frames) if self.objective.frames else None
+        return np.stack([t.value(self.robot, X, poses) for _, t in self.objective], axis=1)
+
+    def cost(self, X: np.ndarray) -> np.ndarray:
+        """``(pop,)`` objective values: the population cost solvers minimize."""
+        return self.values(X) @ self.weights
+
+    def evaluate(self, X: np.ndarray) -> Evaluation:
+        """Every term of every member, the cost and the task error."""
+        values = self.values(X)
+        return Evaluation(
+            self.names, self.weights, values, values @ self.weights, values[:, self.task_mask].sum(axis=1)
+        )

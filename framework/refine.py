@@ -1,0 +1,142 @@
+"""Local refinement with Pinocchio's analytic Jacobians: the second phase of the hybrid solver.
+
+From a starting configuration (the best of a global metaheuristic phase), the task terms (position,
+orientation, relative position) become equality constraints ``r(x) = 0`` and the other terms (motion, ...)
+the objective, solved by SLSQP within the search box; a few projected Gauss-Newton steps on the task residuals
+then polish the error to machine precision. If the constraints cannot be met (a target out of reach), a
+bounded Levenberg-Marquardt on the task residuals gets as close as it can. The configuration returned is the
+best of the start and the refined points *by the problem's own objective*, so refinement never makes it worse.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import minimize as scipy_minimize
+
+from .costs import LocalKinematics, Motion
+from .problem import Problem
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """Outcome of :func:`refine`: configuration ``x`` ``(n,)``, its cost, task error and Jacobian evaluations."""
+
+    x: np.ndarray
+    cost: float
+    task_error: float
+    evaluations: int
+    method: str
+
+
+class _Residuals:
+    """Task residuals ``r(x)`` and Jacobians ``J(x)`` of a problem, stacked, cached per configuration."""
+
+    def __init__(self, problem: Problem):
+        self.problem = problem
+        self.task = [t for _, t in problem.objective if t.is_task]
+        self.evaluations = 0
+        self._key: bytes | None = None
+
+    def _local(self, x: np.ndarray) -> LocalKinematics:
+        key = x.tobytes()
+        if key != self._key:
+            self._key, self._cache = key, LocalKinematics(self.problem.robot, x)
+            self.evaluations += 1
+        return self._cache
+
+    def r(self, x: np.ndarray) -> np.ndarray:
+        local = self._local(x)
+        return np.concatenate([t.residual(self.problem.robot, x, local) for t in self.task])
+
+    def J(self, x: np.ndarray) -> np.ndarray:
+        local = self._local(x)
+        return np.vstack([t.jacobian(self.problem.robot, x, local) for t in self.task])
+
+
+def _regularizer(problem: Problem):
+    """The non-task part of the objective and its gradient (motion terms; others are constant in the box)."""
+    robot = problem.robot
+    motions = [(w, t, t.indices(robot), t.previous_values(robot)) for w, t in problem.objective if isinstance(t, Motion)]
+
+    def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
+        value, grad = 0.0, np.zeros_like(x)
+        for w, term, idx, prev in motions:
+            d = x[idx] - prev
+            if term.norm == "l2":
+                norm = np.linalg.norm(d)
+                value += w * norm
+                grad[idx] += w * d / max(norm, 1e-12)
+            else:
+                scale = w / (len(idx) * np.pi)
+                value += scale * np.abs(d).sum()
+                grad[idx] += scale * np.sign(d)
+        return value, grad
+
+    return fun
+
+
+def gauss_newton(
+    residuals: _Residuals, x: np.ndarray, lower: np.ndarray, upper: np.ndarray, *, steps: int, damping: float = 0.0
+) -> np.ndarray:
+    """Projected (damped) Gauss-Newton on the task residuals; stops when a step no longer reduces ``‖r‖``."""
+    r = residuals.r(x)
+    for _ in range(steps):
+        J = residuals.J(x)
+        if damping:
+            dx = -J.T @ np.linalg.solve(J @ J.T + damping * np.eye(len(r)), r)
+        else:
+            dx = -np.linalg.lstsq(J, r, rcond=1e-12)[0]
+        x_new = np.clip(x + dx, lower, upper)
+        r_new = residuals.r(x_new)
+        if not np.linalg.norm(r_new) < np.linalg.norm(r):
+            if damping:
+                damping *= 10.0
+                if damping > 1e6:
+                    break
+                continue
+            break
+        x, r = x_new, r_new
+        if damping:
+            damping = max(damping / 10.0, 1e-12)
+        if np.linalg.norm(r) < 1e-15:
+            break
+    return x
+
+
+def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_iterations: int = 100) -> Refinement:
+    """Refine ``x0`` locally: minimize the non-task terms subject to the task residuals being zero.
+
+    Args:
+        problem: the IK problem (its task terms need residual views: all shipped task terms have them).
+        x0: starting configuration ``(n,)`` inside the search box.
+        tolerance: task error [m or unitless] below which the Gauss-Newton polish stops.
+        max_iterations: SLSQP iteration limit.
+    """
+    robot = problem.robot
+    lower, upper = robot.lower, robot.upper
+    x0 = np.clip(np.asarray(x0, dtype=float), lower, upper)
+    residuals = _Residuals(problem)
+    candidates = [(x0, "start")]
+    if residuals.task:
+        regularizer = _regularizer(problem)
+        slsqp = scipy_minimize(
+            regularizer,
+            x0,
+            jac=True,
+            method="SLSQP",
+            bounds=list(zip(lower, upper)),
+            constraints=[{"type": "eq", "fun": residuals.r, "jac": residuals.J}],
+            options={"maxiter": max_iterations, "ftol": 1e-12},
+        )
+        x = np.clip(slsqp.x, lower, upper)
+        candidates.append((gauss_newton(residuals, x, lower, upper, steps=10), "slsqp+gauss-newton"))
+        if not np.linalg.norm(residuals.r(candidates[-1][0])) < tolerance:  # infeasible or stuck: get close
+            candidates.append((gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3), "levenberg-marquardt"))
+    X = np.array([c[0] for c in candidates])
+    evaluation = problem.evaluate(X)
+    best = int(np.argmin(evaluation.cost))
+    return Refinement(
+        X[best], float(evaluation.cost[best]), float(evaluation.task_error[best]), residuals.evaluations, candidates[best][1]
+    )

@@ -1,0 +1,176 @@
+"""Cost terms on batches against independent computations (Pinocchio FK, scipy Rotation)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.spatial.transform import Rotation
+
+import framework as fw
+from framework.costs import JointLimitPenalty, LocalKinematics, Motion, Orientation, Position, RelativePosition
+from framework.problem import Problem
+
+
+@pytest.fixture(scope="module")
+def robot() -> fw.Robot:
+    return fw.load_robot("youbot_dual_mobile")
+
+
+def reference_placements(robot, X, frame):
+    return [robot.frame_placement(x, frame) for x in X]
+
+
+def test_position_equals_pinocchio_distance(robot, rng):
+    X = robot.random_configurations(rng, 200)
+    target = np.array([0.5, -0.2, 0.45])
+    term = Position("arm2_ee", target)
+    values = Problem(robot, term).values(X)[:, 0]
+    expected = [np.linalg.norm(M.translation - target) for M in reference_placements(robot, X, "arm2_ee")]
+    np.testing.assert_allclose(values, expected, rtol=0, atol=1e-12)
+
+
+def test_relative_position_against_pinocchio(robot, rng):
+    X = robot.random_configurations(rng, 100)
+    offset = np.array([0.2, -0.3, -0.2])
+    values = Problem(robot, RelativePosition("arm1_ee", "arm2_ee", offset)).values(X)[:, 0]
+    a = reference_placements(robot, X, "arm1_ee")
+    b = reference_placements(robot, X, "arm2_ee")
+    expected = [np.linalg.norm(mb.translation - ma.translation - offset) for ma, mb in zip(a, b)]
+    np.testing.assert_allclose(values, expected, atol=1e-12)
+
+
+def test_orientation_is_the_quaternion_vector_norm_from_scipy(robot, rng):
+    X = robot.random_configurations(rng, 200)
+    target_quat = Rotation.random(random_state=3).as_quat()  # (x, y, z, w)
+    values = Problem(robot, Orientation("arm1_ee", target_quat)).values(X)[:, 0]
+    for value, M in zip(values, reference_placements(robot, X, "arm1_ee")):
+        relative = Rotation.from_quat(target_quat).inv() * Rotation.from_matrix(M.rotation)
+        assert value == pytest.approx(np.linalg.norm(relative.as_quat()[:3]), abs=1e-12)
+
+
+@pytest.mark.parametrize("phi", [0.0, 1e-9, 1e-4, 0.3, 1.5, 2.0, np.pi - 1e-6, np.pi])
+def test_orientation_error_is_sin_half_angle(phi):
+    from framework.costs import quaternion_error
+
+    axis = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
+    R_target = Rotation.random(random_state=7).as_matrix()
+    R = R_target @ Rotation.from_rotvec(phi * axis).as_matrix()
+    assert quaternion_error(R[None], R_target)[0] == pytest.approx(np.sin(phi / 2), rel=1e-9, abs=1e-15)
+    assert quaternion_error(R_target[None], R_target)[0] == 0.0
+
+
+def test_orientation_target_as_matrix_or_quaternion_agree(robot, rng):
+    X = robot.random_configurations(rng, 20)
+    rot = Rotation.from_euler("y", np.pi / 2)
+    a = Problem(robot, Orientation("arm1_ee", rot.as_matrix())).values(X)
+    b = Problem(robot, Orientation("arm1_ee", rot.as_quat())).values(X)
+    np.testing.assert_allclose(a, b, atol=1e-14)
+
+
+def test_motion_l2_and_normalized_l1(robot, rng):
+    X = robot.random_configurations(rng, 50)
+    prev = robot.random_configurations(rng, 1)[0]
+    idx = robot.group("arm2")
+    l2 = Problem(robot, Motion("arm2", prev)).values(X)[:, 0]
+    l1 = Problem(robot, Motion("arm2", prev[idx], norm="l1")).values(X)[:, 0]
+    np.testing.assert_allclose(l2, np.sqrt(((X[:, idx] - prev[idx]) ** 2).sum(axis=1)), atol=1e-14)
+    np.testing.assert_allclose(l1, np.abs(X[:, idx] - prev[idx]).sum(axis=1) / (5 * np.pi), atol=1e-14)
+
+
+def test_joint_limit_penalty(robot):
+    X = np.tile(robot.middle, (3, 1))
+    X[1, 4] = robot.upper[4] + 0.25
+    X[2, 0] = robot.lower[0] - 0.5
+    X[2, 12] = robot.upper[12] + 0.125
+    values = Problem(robot, JointLimitPenalty(1000.0)).values(X)[:, 0]
+    np.testing.assert_allclose(values, [0.0, 250.0, 625.0])
+
+
+def test_composition_adds_weighted_terms_exactly(robot, rng):
+    X = robot.random_configurations(rng, 64)
+    prev = robot.middle
+    t1 = Position("arm1_ee", [0.5, -0.2, 0.45])
+    t2 = Position("arm2_ee", [0.7, -0.5, 0.25])
+    m0, m1 = Motion("base", prev), Motion("arm1", prev)
+    objective = 1.2 * t1 + 1.2 * t2 + 0.1 * m0 + 0.4 * m1
+    problem = Problem(robot, objective)
+    parts = [Problem(robot, t).values(X)[:, 0] for t in (t1, t2, m0, m1)]
+    expected = 1.2 * parts[0] + 1.2 * parts[1] + 0.1 * parts[2] + 0.4 * parts[3]
+    np.testing.assert_allclose(problem.cost(X), expected, rtol=1e-15, atol=0)
+    evaluation = problem.evaluate(X)
+    assert evaluation.names == ("position[arm1_ee]", "position[arm2_ee]", "motion[base]", "motion[arm1]")
+    np.testing.assert_array_equal(evaluation.task_error, parts[0] + parts[1])
+    assert sum([t1, t2]).terms == (1.0 * t1 + t2).terms  # sum() works as well
+    assert [w for w, _ in 2 * (t1 + 0.5 * t2)] == [2.0, 1.0]
+
+
+def test_residual_jacobians_match_finite_differences(robot, rng):
+    prev = robot.middle
+    terms = [
+        Position("arm1_ee", [0.5, -0.2, 0.45]),
+        RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
+        Orientation("arm2_ee", Rotation.random(random_state=1).as_matrix()),
+        Motion("arm2", prev),
+    ]
+    h = 1e-7
+    for x in robot.random_configurations(rng, 3):
+        for term in terms:
+            J = term.jacobian(robot, x, LocalKinematics(robot, x))
+            fd = np.column_stack([
+                (term.residual(robot, x + e, LocalKinematics(robot, x + e))
+                 - term.residual(robot, x - e, LocalKinematics(robot, x - e))) / (2 * h)
+                for e in np.eye(robot.n) * h
+            ])
+            np.testing.assert_allclose(J, fd, atol=2e-6, err_msg=term.name)
+
+
+def test_residual_norms_are_the_values(robot, rng):
+    x = robot.random_configurations(rng, 1)[0]
+    local = LocalKinematics(robot, x)
+    for term in (Position("arm1_ee", [0.1, 0.2, 0.3]), RelativePosition("arm1_ee", "arm2_ee", [0, 0, 0.1])):
+        assert np.linalg.norm(term.residual(robot, x, local)) == pytest.approx(Problem(robot, term).values(x)[0, 0], abs=1e-13)
+    o = Orientation("arm1_ee", np.eye(3))
+    angle = np.linalg.norm(o.residual(robot, x, local))
+    assert np.sin(angle / 2) == pytest.approx(Problem(robot, o).values(x)[0, 0], abs=1e-12)
+
+
+# ---------------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize("target", [[np.nan, 0, 0], [0, 0], [[0, 0, 0]], [0, np.inf, 0]])
+def test_bad_position_target(target):
+    with pytest.raises(fw.TaskError):
+        Position("arm1_ee", target)
+
+
+@pytest.mark.parametrize("target", [np.full((3, 3), np.nan), np.zeros(4), np.ones((2, 2)), 2 * np.eye(3), np.diag([1, 1, -1.0])])
+def test_bad_orientation_target(target):
+    with pytest.raises(fw.TaskError):
+        Orientation("arm1_ee", target)
+
+
+def test_unknown_frame_in_a_task(robot):
+    with pytest.raises(fw.UnknownFrameError, match="arm3_ee"):
+        Problem(robot, Position("arm3_ee", [0, 0, 0]))
+
+
+def test_unknown_group_and_wrong_previous_shape(robot):
+    with pytest.raises(fw.UnknownJointError):
+        Problem(robot, Motion("legs", np.zeros(13)))
+    with pytest.raises(fw.TaskError, match="5 \\(group\\) or 13"):
+        Problem(robot, Motion("arm1", np.zeros(7)))
+
+
+@pytest.mark.parametrize("weight", [-1.0, np.nan, np.inf])
+def test_invalid_weights(weight):
+    with pytest.raises(fw.TaskError, match="weight"):
+        weight * Position("arm1_ee", [0, 0, 0])
+
+
+def test_wrong_population_shape_in_cost(robot):
+    problem = Problem(robot, Position("arm1_ee", [0, 0, 0]))
+    with pytest.raises(fw.ConfigurationError):
+        problem.cost(np.zeros((4, 12)))
+    with pytest.raises(fw.ConfigurationError):
+        problem.cost(np.full((4, 13), np.nan))
