@@ -1,0 +1,129 @@
+"""A compact numpy (mu/mu_w, lambda)-CMA-ES, the same algorithm as ``cmaes`` without pycma's overhead.
+
+Reference: N. Hansen, "The CMA Evolution Strategy: A Tutorial", arXiv:1604.00772 (2016/2023), with the
+tutorial's default parameters (positive weights only, c_m = 1, rank-one + rank-mu update, cumulative
+step-size adaptation with the h_sigma stall). pycma's ask/tell costs about 0.65 ms per iteration, which
+dominates the run time on cheap costs; this module runs one generation in a few tens of microseconds.
+
+Differences from pycma's defaults (so outcomes are equivalent, not bitwise equal): no active
+(negative) covariance update, no mirrored sampling, lazy eigendecomposition as in the tutorial's
+``purecma``. Candidates the loop repaired and injected warm-start points are handled as pycma does:
+their step ``y = (x - m) / sigma`` is shortened to Mahalanobis length at most
+``sqrt(n) + 2 n / (n + 2)`` before the update.
+
+Start point and step size as ``cmaes``: ``x0 = initial[0]`` (else uniform in the box),
+``sigma0 = 0.3 * mean box width``; the warm-start points replace the first samples of generation 1.
+
+Evaluations: ``population`` per generation.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from framework.solvers.base import Algorithm
+from framework.solvers.cmaes import start_point_and_step
+from framework.solvers.registry import register
+
+#: Condition number of C above which it is regularized, and relative floor of its eigenvalues.
+MAX_CONDITION = 1e14
+
+
+@register("cmaes_fast")
+class CMAESFast(Algorithm):
+    """Numpy (mu/mu_w, lambda)-CMA-ES (Hansen's tutorial defaults).
+
+    Options:
+        sigma0: Initial step size; ``None`` = 0.3 * mean box width.
+    """
+
+    DEFAULTS: ClassVar[dict[str, Any]] = {"sigma0": None}
+    MIN_POPULATION: ClassVar[int] = 2
+
+    def setup(self) -> None:
+        super().setup()
+        n, lam = self.n, self.population
+        self.mean, self.sigma = start_point_and_step(self)
+        self.sigma0 = self.sigma
+        mu = lam // 2
+        w = np.log((lam + 1) / 2) - np.log(np.arange(1, mu + 1))
+        self.weights = w / w.sum()
+        self.mueff = 1.0 / np.sum(self.weights**2)
+        mueff = self.mueff
+        self.cc = (4 + mueff / n) / (n + 4 + 2 * mueff / n)
+        self.cs = (mueff + 2) / (n + mueff + 5)
+        self.c1 = 2 / ((n + 1.3) ** 2 + mueff)
+        self.cmu = min(1 - self.c1, 2 * (mueff - 2 + 1 / mueff) / ((n + 2) ** 2 + mueff))
+        self.damps = 1 + 2 * max(0.0, np.sqrt((mueff - 1) / (n + 1)) - 1) + self.cs
+        self.chi_n = np.sqrt(n) * (1 - 1 / (4 * n) + 1 / (21 * n**2))
+        self.max_step = np.sqrt(n) + 2 * n / (n + 2)
+        self.pc = np.zeros(n)
+        self.ps = np.zeros(n)
+        self.C = np.eye(n)
+        self.B = np.eye(n)
+        self.D = np.ones(n)
+        self._eigen_generation = 0
+        self._asked = np.empty((0, n))
+        self._max_sigma = 1e3 * float(np.max(self.box.width))
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        return {"sigma0": self.sigma0, "mu": self.weights.size, "mueff": self.mueff}
+
+    def ask(self) -> np.ndarray:
+        """``lambda`` samples ``m + sigma B D z``, shape ``(lambda, n)``."""
+        z = self.rng.standard_normal((self.population, self.n))
+        X = self.mean + self.sigma * (z * self.D) @ self.B.T
+        if self.generation == 0 and self.initial is not None:
+            k = min(self.population - 1, self.initial.shape[0])
+            X[:k] = self.initial[:k]
+        self._asked = X
+        return X.copy()
+
+    def _inv_sqrt_C(self, y: np.ndarray) -> np.ndarray:
+        """``C^{-1/2} y`` for rows of ``y``."""
+        return (y @ self.B / self.D) @ self.B.T
+
+    def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
+        n, mu, w = self.n, self.weights.size, self.weights
+        y = (X - self.mean) / self.sigma
+        foreign = np.any(X != self._asked, axis=1) if self._asked.shape == X.shape else np.ones(len(X), bool)
+        if foreign.any():  # repaired or injected points: clip the Mahalanobis length like pycma
+            length = np.linalg.norm(self._inv_sqrt_C(y[foreign]), axis=1)
+            y[foreign] *= np.minimum(1.0, self.max_step / np.maximum(length, 1e-300))[:, None]
+        order = np.argsort(F, kind="stable")[:mu]
+        y_sel = y[order]
+        y_w = w @ y_sel
+        self.mean = self.mean + self.sigma * y_w
+
+        self.ps = (1 - self.cs) * self.ps + np.sqrt(self.cs * (2 - self.cs) * self.mueff) * self._inv_sqrt_C(
+            y_w
+        )
+        g = self.generation + 1
+        ps_norm = np.linalg.norm(self.ps)
+        hsig = ps_norm / np.sqrt(1 - (1 - self.cs) ** (2 * g)) / self.chi_n < 1.4 + 2 / (n + 1)
+        self.pc = (1 - self.cc) * self.pc + hsig * np.sqrt(self.cc * (2 - self.cc) * self.mueff) * y_w
+        rank_mu = (y_sel.T * w) @ y_sel
+        self.C = (
+            (1 - self.c1 - self.cmu) * self.C
+            + self.c1 * (np.outer(self.pc, self.pc) + (1 - hsig) * self.cc * (2 - self.cc) * self.C)
+            + self.cmu * rank_mu
+        )
+        self.sigma *= np.exp((self.cs / self.damps) * (ps_norm / self.chi_n - 1))
+        self.sigma = float(np.clip(self.sigma, 1e-300, self._max_sigma))
+        self.generation = g
+        if g - self._eigen_generation > self.population / (self.c1 + self.cmu) / n / 10:
+            self._update_eigensystem()
+
+    def _update_eigensystem(self) -> None:
+        """Refresh ``B``, ``D`` from ``C`` (symmetrized, regularized above ``MAX_CONDITION``)."""
+        self._eigen_generation = self.generation
+        self.C = 0.5 * (self.C + self.C.T)
+        eigvals, B = np.linalg.eigh(self.C)
+        top = max(float(eigvals[-1]), 1e-300)
+        if eigvals[0] < top / MAX_CONDITION:
+            self.C += (top / MAX_CONDITION - min(float(eigvals[0]), 0.0)) * np.eye(self.n)
+            eigvals, B = np.linalg.eigh(self.C)
+        self.B, self.D = B, np.sqrt(np.maximum(eigvals, 1e-300))
