@@ -72,6 +72,11 @@ class Problem:
         for _, term in objective:
             term.validate(self.robot)
         object.__setattr__(self, "objective", objective)
+        # The hot path, prepared once: bound term evaluators, the weights, one FK program for all frames.
+        object.__setattr__(self, "_evaluators", tuple(t.bind(self.robot) for _, t in objective))
+        object.__setattr__(self, "_weights", np.array([w for w, _ in objective]))
+        frames = objective.frames
+        object.__setattr__(self, "_kinematics", self.robot._kinematics(frames) if frames else None)
 
     @property
     def n(self) -> int:
@@ -83,7 +88,7 @@ class Problem:
 
     @property
     def weights(self) -> np.ndarray:
-        return np.array([w for w, _ in self.objective])
+        return self._weights.copy()
 
     @property
     def task_mask(self) -> np.ndarray:
@@ -96,17 +101,24 @@ class Problem:
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, k)`` unweighted term values for a population ``X`` ``(pop, n)``."""
-        X = self.robot.check_population(X)
-        poses = self.robot.frame_poses(X, self.objective.frames) if self.objective.frames else None
-        return np.stack([t.value(self.robot, X, poses) for _, t in self.objective], axis=1)
+        if self._kinematics is None:
+            X = self.robot.check_population(X)
+            poses = None
+        else:  # the FK kernel rejects NaN/inf itself
+            X = self.robot.check_population(X, finite=False)
+            poses = self._kinematics(X)
+        values = np.empty((X.shape[0], len(self._evaluators)))
+        for k, evaluate in enumerate(self._evaluators):
+            values[:, k] = evaluate(X, poses)
+        return values
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` objective values: the population cost solvers minimize."""
-        return self.values(X) @ self.weights
+        return self.values(X) @ self._weights
 
     def evaluate(self, X: np.ndarray) -> Evaluation:
         """Every term of every member, the cost and the task error."""
         values = self.values(X)
         return Evaluation(
-            self.names, self.weights, values, values @ self.weights, values[:, self.task_mask].sum(axis=1)
+            self.names, self.weights, values, values @ self._weights, values[:, self.task_mask].sum(axis=1)
         )

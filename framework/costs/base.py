@@ -14,7 +14,7 @@ terms: their unweighted sum is the task error that decides success.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +46,10 @@ class Term:
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
         """Unweighted value for each member of ``X`` ``(pop, n)``: shape ``(pop,)``."""
         raise NotImplementedError
+
+    def bind(self, robot: Robot) -> Callable[[np.ndarray, FramePoses], np.ndarray]:
+        """``value`` specialized to one robot, with lookups (frames, groups) done once: the hot path."""
+        return lambda X, poses: self.value(robot, X, poses)
 
     # Residual view, for local refinement (task terms and smooth regularizers).
     def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
@@ -145,6 +149,11 @@ class LocalKinematics:
         """``(6, n)``: linear rows then angular rows, world-aligned, in joint coordinates."""
         J = pin.getFrameJacobian(self.robot.model, self.data, self.robot.frame_id(frame), pin.LOCAL_WORLD_ALIGNED)
         return J @ self._T
+
+
+def row_norms(D: np.ndarray) -> np.ndarray:
+    """Euclidean norm of each row of ``D`` ``(pop, m)``: shape ``(pop,)``."""
+    return np.sqrt(np.einsum("ij,ij->i", D, D))
 
 
 def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str) -> np.ndarray:

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term
+from .base import LocalKinematics, Term, row_norms
 
 NORMS = ("l2", "l1")
 
@@ -49,10 +49,21 @@ class Motion(Term):
         self.previous_values(robot)
 
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
-        delta = X[:, self.indices(robot)] - self.previous_values(robot)
-        if self.norm == "l2":
-            return np.linalg.norm(delta, axis=-1)
-        return np.abs(delta).sum(axis=-1) / (delta.shape[-1] * np.pi)
+        return self.bind(robot)(X, poses)
+
+    def bind(self, robot: Robot):
+        idx, previous = self.indices(robot), self.previous_values(robot)
+        if len(idx) and np.array_equal(idx, np.arange(idx[0], idx[0] + len(idx))):
+            idx = slice(int(idx[0]), int(idx[0]) + len(idx))  # a view instead of a gather
+        scale = 1.0 / (len(previous) * np.pi)
+
+        def l2(X: np.ndarray, poses: FramePoses) -> np.ndarray:
+            return row_norms(X[:, idx] - previous)
+
+        def l1(X: np.ndarray, poses: FramePoses) -> np.ndarray:
+            return np.abs(X[:, idx] - previous).sum(axis=-1) * scale
+
+        return l2 if self.norm == "l2" else l1
 
     def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         """``x_g − x_g^prev`` (its L2 norm is the ``"l2"`` value)."""

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term, as_vector
+from .base import LocalKinematics, Term, as_vector, row_norms
 
 
 class Position(Term):
@@ -24,6 +24,14 @@ class Position(Term):
 
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
         return np.linalg.norm(poses.position(self.frame) - self.target, axis=-1)
+
+    def bind(self, robot: Robot):
+        target = self.target
+
+        def value(X: np.ndarray, poses: FramePoses) -> np.ndarray:
+            return row_norms(poses.position(self.frame) - target)
+
+        return value
 
     def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         return local.placement(self.frame).translation - self.target

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term, as_vector
+from .base import LocalKinematics, Term, as_vector, row_norms
 
 
 class RelativePosition(Term):
@@ -29,6 +29,12 @@ class RelativePosition(Term):
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
         r = poses.position(self.frame_b) - poses.position(self.frame_a) - self.offset
         return np.linalg.norm(r, axis=-1)
+
+    def bind(self, robot: Robot):
+        def value(X: np.ndarray, poses: FramePoses) -> np.ndarray:
+            return row_norms(poses.position(self.frame_b) - poses.position(self.frame_a) - self.offset)
+
+        return value
 
     def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         return local.placement(self.frame_b).translation - local.placement(self.frame_a).translation - self.offset

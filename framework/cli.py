@@ -1,0 +1,176 @@
+"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``run TASK`` (and more as they land).
+
+Exit codes: 0 success; 1 the run finished but some case missed its tolerance; 2 bad input (missing file,
+bad TOML, unknown robot/solver/frame, invalid weights: one clear line, no traceback); 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from .errors import MetaikError, TaskError
+
+EXIT_OK, EXIT_MISSED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="metaik", description="Inverse kinematics by optimization for any URDF robot."
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    sub.add_parser("robots", help="list the shipped robots (DOF, end-effectors, groups)")
+
+    show = sub.add_parser("show", help="describe a robot: joints, bounds, frames, groups")
+    show.add_argument("robot", help="robot index name or URDF/xacro path")
+
+    run = sub.add_parser("run", help="solve a task file (a path, or the name of a shipped task)")
+    run.add_argument("task", help="task file (.toml) or shipped task name, e.g. youbot_dual_coordinated_ik")
+    run.add_argument("--solver", help="override the task's solver (e.g. hybrid, cmaes, de, sde)")
+    run.add_argument("--seed", type=int, help="override the seed")
+    run.add_argument("--iterations", type=int, help="override max_iterations")
+    run.add_argument("--population", type=int, help="override the population size")
+    run.add_argument("--case", action="append", help="only these cases (by name); repeatable")
+
+    sub.add_parser("tasks", help="list the shipped task files")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    console = Console()
+    try:
+        return {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks}[args.command](args, console)
+    except MetaikError as err:
+        Console(stderr=True).print(f"[bold red]error:[/] {err}", highlight=False, markup=True, soft_wrap=True)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        Console(stderr=True).print("interrupted")
+        return EXIT_INTERRUPTED
+
+
+def _robots(args, console: Console) -> int:
+    from .loading import load_robot, robot_index
+
+    table = Table(title="Shipped robots (robots/index.toml)")
+    for column in ("name", "DOF", "end-effectors", "groups"):
+        table.add_column(column, no_wrap=True)
+    table.add_column("description", overflow="fold")
+    for name, entry in robot_index().items():
+        robot = load_robot(name)
+        groups = ", ".join(f"{g} ({len(i)})" for g, i in robot.groups.items())
+        table.add_row(name, str(robot.n), ", ".join(robot.end_effectors), groups, entry.get("description", ""))
+    console.print(table)
+    return EXIT_OK
+
+
+def _show(args, console: Console) -> int:
+    from .loading import load_robot
+
+    robot = load_robot(args.robot)
+    console.print(f"[bold]{robot.name}[/]: {robot.n} joint coordinates, end-effectors {list(robot.end_effectors)}")
+    table = Table()
+    for column in ("#", "coordinate", "kind", "lower", "upper", "group"):
+        table.add_column(column)
+    group_of = {int(i): g for g, idx in robot.groups.items() for i in idx}
+    for joint in robot.joints:
+        for i in joint.coordinates:
+            table.add_row(
+                str(i), robot.coordinate_names[i], joint.kind.value,
+                f"{robot.lower[i]:.4g}", f"{robot.upper[i]:.4g}", group_of.get(i, ""),
+            )
+    console.print(table)
+    if robot.locked:
+        console.print("locked: " + ", ".join(f"{k}={v:.4g}" for k, v in robot.locked.items()))
+    return EXIT_OK
+
+
+def _tasks(args, console: Console) -> int:
+    from .resources import data_dir
+
+    table = Table(title="Shipped tasks (metaik run NAME)")
+    table.add_column("name", no_wrap=True)
+    table.add_column("first line", overflow="fold")
+    for path in sorted(data_dir("tasks").glob("*.toml")):
+        first = path.read_text().splitlines()[0].lstrip("# ") if path.stat().st_size else ""
+        table.add_row(path.stem, first)
+    console.print(table)
+    return EXIT_OK
+
+
+def resolve_task(name: str) -> Path:
+    """A task file path from a path or the name of a shipped task."""
+    from .resources import data_dir
+
+    path = Path(name)
+    if path.is_file():
+        return path
+    shipped = data_dir("tasks") / (name if name.endswith(".toml") else f"{name}.toml")
+    if shipped.is_file():
+        return shipped
+    raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
+
+
+def _run(args, console: Console) -> int:
+    from .solve import solve
+    from .taskfile import load_task
+
+    task = load_task(resolve_task(args.task))
+    settings = dict(task.solver)
+    overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
+                 "population": args.population}
+    settings.update({k: v for k, v in overrides.items() if v is not None})
+    solver = settings.get("name", "hybrid")
+    cases = [c for c in task.cases if not args.case or c.name in args.case]
+    if not cases:
+        raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
+    console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF) with {solver}: {task.description}")
+
+    names = cases[0].problem.names
+    table = Table(title=f"{task.name}: {solver}, seed {settings.get('seed', 0)} (unweighted terms)")
+    table.add_column("")
+    rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
+                                                   "evaluations", "time (s)")}
+    all_ok = True
+    with console.status("solving") as status:
+        for case in cases:
+            status.update(f"solving {case.name}")
+            result = solve(
+                case.problem,
+                solver,
+                seed=settings.get("seed", 0),
+                max_iterations=settings.get("max_iterations", 1000),
+                population=settings.get("population", 30),
+                tolerance=settings.get("tolerance", 1e-4),
+                stop_at_tolerance=settings.get("stop_at_tolerance", False),
+                options=settings.get("options"),
+            )
+            all_ok &= result.success
+            table.add_column(case.name, justify="right")
+            for n in names:
+                rows[n].append(f"{result.terms[n]:.3e}")
+            rows["cost"].append(f"{result.cost:.6g}")
+            rows["task error"].append(f"{result.task_error:.2e}")
+            rows["success"].append("yes" if result.success else "[red]no[/]")
+            rows["iterations"].append(str(result.iterations))
+            rows["evaluations"].append(str(result.evaluations))
+            rows["time (s)"].append(f"{result.wall_time:.3f}")
+    for label, cells in rows.items():
+        table.add_row(label, *cells)
+    console.print(table)
+    x = result.configuration
+    groups = task.robot.groups or {"all": np.arange(task.robot.n)}
+    console.print(f"configuration of {cases[-1].name}: " + "; ".join(
+        f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
+    return EXIT_OK if all_ok else EXIT_MISSED
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,113 @@
+"""The task-file format and the metaik command line: results, and every bad-input path with its exit code."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import framework as fw
+from framework.cli import EXIT_INPUT, EXIT_MISSED, EXIT_OK, main
+from framework.resources import data_dir
+from framework.taskfile import evaluate, load_task
+
+TASK = data_dir("tasks") / "youbot_dual_coordinated_ik.toml"
+
+MINIMAL = """
+[task]
+name = "reach"
+robot = "youbot_arm"
+[solver]
+name = "hybrid"
+[[terms]]
+type = "position"
+frame = "ee"
+target = "p"
+[[cases]]
+name = "near"
+p = [0.3, 0.0, 0.3]
+"""
+
+
+def test_paper000_task_file_matches_the_paper():
+    task = load_task(TASK)
+    assert [c.name for c in task.cases] == ["target 1", "target 2", "target 3", "target 4"]
+    problem = task.cases[0].problem
+    assert problem.names == ("e_t1", "e_t2", "e_q0", "e_q1", "e_q2")
+    np.testing.assert_allclose(problem.weights, [1.2, 1.2, 0.1, 0.4, 0.4])
+    e_t2 = problem.objective.terms[1][1]
+    np.testing.assert_allclose(e_t2.target, [0.5 + 0.2, -0.2 - 0.3, 0.45 - 0.2])  # t*_e2 = t*_e1 + t_r
+    q_prev = problem.objective.terms[2][1].previous
+    np.testing.assert_allclose(q_prev[:3], [0, 0, np.pi / 2])
+    np.testing.assert_allclose(q_prev[3:8], [-np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0])
+    assert task.solver["population"] == 30 and task.solver["max_iterations"] == 1000
+
+
+def test_expressions():
+    assert evaluate("pi/2", {}, "x") == pytest.approx(np.pi / 2)
+    np.testing.assert_allclose(evaluate("a + 2*b", {"a": [1, 2, 3], "b": [1, 0, -1]}, "x"), [3, 2, 1])
+    np.testing.assert_allclose(evaluate("Ry(pi/2)", {}, "x") @ [1, 0, 0], [0, 0, -1], atol=1e-15)
+    with pytest.raises(fw.TaskError, match="not a number/vector expression"):
+        evaluate("__import__('os')", {}, "x")
+    with pytest.raises(fw.TaskError, match="unknown name 'os'"):
+        evaluate("os", {}, "x")
+    with pytest.raises(fw.TaskError):
+        evaluate("a.b", {"a": 1}, "x")
+
+
+def test_run_hybrid_prints_the_table(capsys):
+    assert main(["run", str(TASK), "--solver", "hybrid", "--case", "target 2"]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert "target 2" in out and "e_t1" in out and "yes" in out
+
+
+def test_run_by_shipped_name_and_missed_tolerance_exit_code(tmp_path, capsys):
+    path = tmp_path / "far.toml"
+    path.write_text(MINIMAL.replace("[0.3, 0.0, 0.3]", "[2.0, 0.0, 0.3]"))
+    assert main(["run", str(path)]) == EXIT_MISSED
+    assert "no" in capsys.readouterr().out
+
+
+def test_robots_and_show(capsys):
+    assert main(["robots"]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert "youbot_dual_mobile" in out and "13" in out
+    assert main(["show", "youbot_dual_mobile"]) == EXIT_OK
+    assert "base_theta" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (None, "does not exist"),
+        ("[task\nname=", "not valid TOML"),
+        (MINIMAL.replace('"youbot_arm"', '"youbot_arn"'), "unknown robot 'youbot_arn'"),
+        (MINIMAL.replace('"hybrid"', '"annealing"'), "unknown solver 'annealing'"),
+        (MINIMAL.replace('frame = "ee"', 'frame = "gripper"'), "no frame 'gripper'"),
+        (MINIMAL.replace('target = "p"', 'target = "p"\nweight = -2'), "weight"),
+        (MINIMAL.replace('target = "p"', 'target = "q"'), "unknown name 'q'"),
+        (MINIMAL.replace("[0.3, 0.0, 0.3]", '[0.3, "nan", 0.3]'), "unknown name 'nan'"),
+        (MINIMAL.replace('type = "position"', 'type = "posture"'), "unknown type 'posture'"),
+        (MINIMAL.replace('name = "hybrid"', 'name = "hybrid"\npopsize = 3'), "unknown keys"),
+    ],
+)
+def test_bad_input_is_one_line_with_exit_code_2(tmp_path, capsys, content, message):
+    path = tmp_path / "task.toml"
+    if content is not None:
+        path.write_text(content)
+    assert main(["run", str(path)]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert message in err.replace("\n", " ")
+    assert "Traceback" not in err
+
+
+def test_unknown_robot_in_show(capsys):
+    assert main(["show", "nobot"]) == EXIT_INPUT
+    assert "unknown robot" in capsys.readouterr().err
+
+
+def test_help_everywhere(capsys):
+    for argv in (["--help"], ["run", "--help"], ["show", "--help"], ["robots", "--help"]):
+        with pytest.raises(SystemExit) as stop:
+            main(argv)
+        assert stop.value.code == 0
+    assert "task" in capsys.readouterr().out

@@ -1,0 +1,100 @@
+"""solve(): the shared solver interface over an IK problem, and the hybrid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import framework as fw
+from framework.costs import Motion, Position
+from framework.problem import Problem
+from framework.solve import solve
+
+Q_PREV = np.r_[0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0]
+
+
+@pytest.fixture(scope="module")
+def problem() -> Problem:
+    """Paper 000, target point 1 (coordinated: t*_e2 = t*_e1 + t_r)."""
+    robot = fw.load_robot("youbot_dual_mobile")
+    t1, tr = np.array([0.5, -0.2, 0.45]), np.array([0.2, -0.3, -0.2])
+    objective = (
+        1.2 * Position("arm1_ee", t1)
+        + 1.2 * Position("arm2_ee", t1 + tr)
+        + 0.1 * Motion("base", Q_PREV)
+        + 0.4 * Motion("arm1", Q_PREV)
+        + 0.4 * Motion("arm2", Q_PREV)
+    )
+    return Problem(robot, objective)
+
+
+@pytest.mark.parametrize("solver", ["cmaes", "de", "sde", "hybrid"])
+def test_same_seed_same_result(problem, solver):
+    a = solve(problem, solver, seed=5, max_iterations=40)
+    b = solve(problem, solver, seed=5, max_iterations=40)
+    np.testing.assert_array_equal(a.configuration, b.configuration)
+    np.testing.assert_array_equal(a.history, b.history)
+    c = solve(problem, solver, seed=6, max_iterations=40)
+    assert not np.array_equal(a.configuration, c.configuration)
+
+
+def test_result_reports_every_term(problem):
+    result = solve(problem, "de", seed=0, max_iterations=50)
+    assert set(result.terms) == set(problem.names)
+    weighted = sum(w * result.terms[n] for w, n in zip(problem.weights, problem.names))
+    assert result.cost == pytest.approx(weighted, rel=1e-12)
+    assert result.task_error == pytest.approx(result.terms["position[arm1_ee]"] + result.terms["position[arm2_ee]"])
+    assert result.iterations == 50 and len(result.history) == 50
+    assert result.evaluations >= 50 * 30
+    assert np.all(np.diff(result.history) <= 0)  # best-so-far never increases
+    assert np.all(result.configuration >= problem.robot.lower) and np.all(result.configuration <= problem.robot.upper)
+
+
+def test_cmaes_reaches_the_target_and_the_hybrid_matches_it_with_fewer_evaluations(problem):
+    cma = solve(problem, "cmaes_fast", seed=1, max_iterations=600)
+    hybrid = solve(problem, "hybrid", seed=1)
+    assert cma.task_error < 1e-9
+    assert hybrid.success and hybrid.task_error < 1e-12
+    assert hybrid.cost <= cma.cost + 1e-6  # still minimizes motion, not only reaches
+    assert hybrid.evaluations < cma.evaluations / 5
+
+
+def test_out_of_reach_target_returns_best_effort_without_raising():
+    robot = fw.load_robot("youbot_arm")
+    problem = Problem(robot, Position("ee", [3.0, 0.0, 0.5]))
+    for solver in ("de", "hybrid"):
+        result = solve(problem, solver, seed=0, max_iterations=60)
+        assert not result.success
+        assert result.task_error > 2.0  # the arm reaches about 0.55 m
+        assert result.stop_reason in ("max_iterations", "refinement_stalled")
+
+
+def test_stop_at_tolerance(problem):
+    result = solve(problem, "de", seed=0, max_iterations=1000, tolerance=1e-2, stop_at_tolerance=True)
+    assert result.success and result.stop_reason == "tolerance" and result.iterations < 1000
+
+
+def test_warm_start_from_a_solution(problem):
+    first = solve(problem, "hybrid", seed=0)
+    again = solve(problem, "cmaes_fast", seed=0, max_iterations=1, initial=first.configuration)
+    assert again.cost <= first.cost + 1e-3
+
+
+def test_bad_solver_and_settings(problem):
+    with pytest.raises(fw.SolverError, match="hybrid"):
+        solve(problem, "simulated_annealing")
+    with pytest.raises(fw.SolverError):
+        solve(problem, "de", options={"F_typo": 0.5})
+    with pytest.raises(fw.SolverError):
+        solve(problem, "de", tolerance=-1)
+    with pytest.raises(fw.ConfigurationError):
+        solve(problem, "de", initial=np.zeros(12))
+
+
+def test_bounds_modes(problem):
+    with pytest.raises(fw.TaskError):
+        Problem(problem.robot, problem.objective, bounds="reflect")
+    penalized = Problem(problem.robot, problem.objective, bounds="penalty")
+    assert penalized.names[-1] == "joint_limits" and penalized.repair_mode == "none"
+    result = solve(penalized, "de", seed=0, max_iterations=100)
+    assert result.terms["joint_limits"] == 0.0
