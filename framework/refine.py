@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize as scipy_minimize
 
-from .costs import LocalKinematics, Motion
+from .costs import JointLimitPenalty, LocalKinematics, Motion
 from .problem import Problem
 
 
@@ -38,11 +38,12 @@ class _Residuals:
         self.task = [t for _, t in problem.objective if t.is_task]
         self.evaluations = 0
         self._key: bytes | None = None
+        self._data = problem.robot.model.createData()
 
     def _local(self, x: np.ndarray) -> LocalKinematics:
         key = x.tobytes()
         if key != self._key:
-            self._key, self._cache = key, LocalKinematics(self.problem.robot, x)
+            self._key, self._cache = key, LocalKinematics(self.problem.robot, x, self._data)
             self.evaluations += 1
         return self._cache
 
@@ -78,10 +79,22 @@ def _regularizer(problem: Problem):
 
 
 def gauss_newton(
-    residuals: _Residuals, x: np.ndarray, lower: np.ndarray, upper: np.ndarray, *, steps: int, damping: float = 0.0
+    residuals: _Residuals,
+    x: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    *,
+    steps: int,
+    damping: float = 0.0,
+    tolerance: float = 1e-15,
 ) -> np.ndarray:
-    """Projected (damped) Gauss-Newton on the task residuals; stops when a step no longer reduces ``‖r‖``."""
+    """Projected Gauss-Newton (``damping = 0``) or Levenberg-Marquardt on the task residuals.
+
+    Steps are clipped to the box; stops at ``‖r‖ < tolerance``, when no step reduces ``‖r‖``, or when ten
+    steps in a row gained less than 1 % (stuck in a local minimum or against a limit: better to restart).
+    """
     r = residuals.r(x)
+    checkpoint, since = np.linalg.norm(r), 0
     for _ in range(steps):
         J = residuals.J(x)
         if damping:
@@ -100,7 +113,13 @@ def gauss_newton(
         x, r = x_new, r_new
         if damping:
             damping = max(damping / 10.0, 1e-12)
-        if np.linalg.norm(r) < 1e-15:
+        norm = np.linalg.norm(r)
+        if norm < tolerance:
+            break
+        since += 1
+        if norm < 0.99 * checkpoint:
+            checkpoint, since = norm, 0
+        elif since >= 10:
             break
     return x
 
@@ -119,7 +138,11 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
     x0 = np.clip(np.asarray(x0, dtype=float), lower, upper)
     residuals = _Residuals(problem)
     candidates = [(x0, "start")]
-    if residuals.task:
+    regularized = any(not t.is_task and not isinstance(t, JointLimitPenalty) for _, t in problem.objective)
+    if residuals.task and not regularized:  # pure task (e.g. pose IK): Levenberg-Marquardt alone
+        x = gauss_newton(residuals, x0, lower, upper, steps=max_iterations, damping=1e-6, tolerance=tolerance)
+        candidates.append((x, "levenberg-marquardt"))
+    elif residuals.task:
         regularizer = _regularizer(problem)
         slsqp = scipy_minimize(
             regularizer,
@@ -133,7 +156,8 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         x = np.clip(slsqp.x, lower, upper)
         candidates.append((gauss_newton(residuals, x, lower, upper, steps=10), "slsqp+gauss-newton"))
         if not np.linalg.norm(residuals.r(candidates[-1][0])) < tolerance:  # infeasible or stuck: get close
-            candidates.append((gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3), "levenberg-marquardt"))
+            x = gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3, tolerance=tolerance)
+            candidates.append((x, "levenberg-marquardt"))
     X = np.array([c[0] for c in candidates])
     evaluation = problem.evaluate(X)
     best = int(np.argmin(evaluation.cost))

@@ -164,11 +164,18 @@ class Robot:
     def frame_names(self) -> tuple[str, ...]:
         return tuple(f.name for f in self.model.frames)
 
+    @cached_property
+    def _frame_ids(self) -> dict[str, int]:
+        return {f.name: i for i, f in enumerate(self.model.frames)}
+
     def frame_id(self, frame: str) -> int:
         """Pinocchio index of a frame; raises :class:`UnknownFrameError` naming close matches."""
-        if not isinstance(frame, str) or not self.model.existFrame(frame):
-            raise UnknownFrameError(f"robot {self.name!r} has no frame {frame!r}{_suggest(frame, self.frame_names)}")
-        return self.model.getFrameId(frame)
+        try:
+            return self._frame_ids[frame]
+        except (KeyError, TypeError):
+            raise UnknownFrameError(
+                f"robot {self.name!r} has no frame {frame!r}{_suggest(frame, self.frame_names)}"
+            ) from None
 
     def joint(self, name: str) -> Joint:
         for joint in self.joints:
@@ -234,6 +241,8 @@ class Robot:
         """Pinocchio configurations ``q`` for joint coordinates; ``(n,) -> (nq,)``, ``(pop, n) -> (pop, nq)``."""
         single = np.ndim(X) == 1
         X = self.check_population(X)
+        if self._q_is_x:
+            return X[0].copy() if single else X.copy()
         Q = np.empty((X.shape[0], self.model.nq))
         for j in self.joints:
             i, k = j.index, j.idx_q
@@ -245,6 +254,11 @@ class Robot:
             else:
                 Q[:, k] = X[:, i]
         return Q[0] if single else Q
+
+    @cached_property
+    def _q_is_x(self) -> bool:
+        """True when Pinocchio's q is the joint-coordinate vector itself (no continuous or planar joint)."""
+        return all(j.kind in (JointKind.REVOLUTE, JointKind.PRISMATIC) for j in self.joints)
 
     def from_pinocchio(self, Q: np.ndarray) -> np.ndarray:
         """Joint coordinates for Pinocchio configurations; ``(nq,) -> (n,)``, ``(pop, nq) -> (pop, n)``."""
@@ -271,16 +285,15 @@ class Robot:
         Identity except for planar joints, whose Pinocchio velocity is expressed in the moving joint frame:
         ``(v_x, v_y) = R(θ)ᵀ (ẋ, ẏ)``, ``ω = θ̇``. A Pinocchio Jacobian ``J`` (``6 × nv``) becomes ``J @ dv/dx``.
         """
+        T = np.eye(self.n)  # nv == n: one velocity per coordinate, in the same order
+        planar = [j for j in self.joints if j.kind is JointKind.PLANAR]
+        if not planar:
+            return T
         x = self.check_population(x)[0]
-        T = np.zeros((self.model.nv, self.n))
-        for j in self.joints:
-            i, k = j.index, j.idx_v
-            if j.kind is JointKind.PLANAR:
-                c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
-                T[k : k + 2, i : i + 2] = [[c, s], [-s, c]]
-                T[k + 2, i + 2] = 1.0
-            else:
-                T[k, i] = 1.0
+        for j in planar:
+            i = j.index
+            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+            T[i : i + 2, i : i + 2] = [[c, s], [-s, c]]
         return T
 
     # ------------------------------------------------------------------ kinematics
@@ -340,6 +353,8 @@ def build_joints(model: pin.Model) -> tuple[Joint, ...]:
             kind, axis = joint_kind_and_axis(jm)
         except UnsupportedJointError as err:
             raise UnsupportedJointError(f"joint {model.names[jid]!r}: {err}") from None
+        if jm.idx_v != index:  # e.g. mimic joints, which have no velocity of their own
+            raise UnsupportedJointError(f"joint {model.names[jid]!r} breaks the one-velocity-per-coordinate layout")
         joints.append(Joint(model.names[jid], kind, index, jid, jm.idx_q, jm.idx_v, axis))
         index += kind.width
     return tuple(joints)

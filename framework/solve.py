@@ -18,7 +18,12 @@ from .problem import Problem
 from .refine import refine
 from .solvers import available_solvers, minimize
 
-HYBRID_DEFAULTS: dict[str, Any] = {"global_solver": "cmaes_fast", "global_iterations": 30, "refine_iterations": 100}
+HYBRID_DEFAULTS: dict[str, Any] = {
+    "global_solver": "cmaes_fast",  # metaheuristic of the global phase
+    "global_iterations": 30,  # its iterations; 0 refines straight from `initial` (or the box centre)
+    "refine_iterations": 100,  # SLSQP / Levenberg-Marquardt iterations per refinement
+    "time_budget": None,  # seconds: restart the refinement from random configurations until success or budget
+}
 
 
 @dataclass(frozen=True)
@@ -121,23 +126,39 @@ def _hybrid(problem, rng, population, tolerance, initial, options, start) -> IKR
     if unknown:
         raise SolverError(f"unknown hybrid option(s) {sorted(unknown)}; known: {sorted(HYBRID_DEFAULTS)}")
     settings = {**HYBRID_DEFAULTS, **options}
-    run = minimize(
-        problem.cost,
-        (problem.robot.lower, problem.robot.upper),
-        solver=settings["global_solver"],
-        rng=rng,
-        max_iterations=settings["global_iterations"],
-        population=population,
-        initial=initial,
-        bounds=problem.repair_mode,
-        options=settings.get("global_options"),
-    )
-    refined = refine(problem, run.x, tolerance=min(tolerance, 1e-12), max_iterations=settings["refine_iterations"])
-    history = np.append(run.history, refined.cost)
-    stop = "tolerance" if refined.task_error <= tolerance else "refinement_stalled"
-    settings["refinement"] = refined.method
-    return _result(problem, refined.x, stop, run.iterations + 1, run.evaluations + refined.evaluations, start,
-                   history, "hybrid", {**settings, "population": population}, tolerance)
+    robot = problem.robot
+    if settings["global_iterations"] > 0:
+        run = minimize(
+            problem.cost,
+            (robot.lower, robot.upper),
+            solver=settings["global_solver"],
+            rng=rng,
+            max_iterations=settings["global_iterations"],
+            population=population,
+            initial=initial,
+            bounds=problem.repair_mode,
+            options=settings.get("global_options"),
+        )
+        x0, history, iterations, evaluations = run.x, list(run.history), run.iterations, run.evaluations
+    else:
+        x0 = initial[0] if initial is not None else robot.middle
+        history, iterations, evaluations = [], 0, 0
+    refine_tolerance = min(tolerance, 1e-12)
+    best = refine(problem, x0, tolerance=refine_tolerance, max_iterations=settings["refine_iterations"])
+    evaluations += best.evaluations
+    restarts, budget = 0, settings["time_budget"]
+    while budget is not None and best.task_error > tolerance and time.perf_counter() - start < budget:
+        restarts += 1
+        x0 = robot.random_configurations(rng, 1)[0]
+        attempt = refine(problem, x0, tolerance=refine_tolerance, max_iterations=settings["refine_iterations"])
+        evaluations += attempt.evaluations
+        if attempt.cost < best.cost:
+            best = attempt
+    history.append(best.cost)
+    stop = "tolerance" if best.task_error <= tolerance else ("time_budget" if budget else "refinement_stalled")
+    settings.update(refinement=best.method, restarts=restarts)
+    return _result(problem, best.x, stop, iterations + 1 + restarts, evaluations, start, history, "hybrid",
+                   {**settings, "population": population}, tolerance)
 
 
 def _result(problem, x, stop, iterations, evaluations, start, history, solver, settings, tolerance) -> IKResult:

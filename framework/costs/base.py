@@ -133,14 +133,14 @@ class LocalKinematics:
     Jacobians are returned in joint coordinates (``J_pin @ dv/dx``), world-aligned (``LOCAL_WORLD_ALIGNED``).
     """
 
-    def __init__(self, robot: Robot, x: np.ndarray):
+    def __init__(self, robot: Robot, x: np.ndarray, data: pin.Data | None = None):
         self.robot = robot
         self.x = np.asarray(x, dtype=float)
-        self.data = robot.model.createData()
+        self.data = robot.model.createData() if data is None else data  # reuse one in loops: it is costly
         q = robot.to_pinocchio(self.x)
         pin.computeJointJacobians(robot.model, self.data, q)
         pin.updateFramePlacements(robot.model, self.data)
-        self._T = robot.coordinate_jacobian(self.x)
+        self._T = None if robot._q_is_x else robot.coordinate_jacobian(self.x)
 
     def placement(self, frame: str) -> pin.SE3:
         return self.data.oMf[self.robot.frame_id(frame)]
@@ -148,7 +148,7 @@ class LocalKinematics:
     def frame_jacobian(self, frame: str) -> np.ndarray:
         """``(6, n)``: linear rows then angular rows, world-aligned, in joint coordinates."""
         J = pin.getFrameJacobian(self.robot.model, self.data, self.robot.frame_id(frame), pin.LOCAL_WORLD_ALIGNED)
-        return J @ self._T
+        return J if self._T is None else J @ self._T
 
 
 def row_norms(D: np.ndarray) -> np.ndarray:
