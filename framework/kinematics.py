@@ -100,17 +100,14 @@ class PopulationKinematics:
         """Poses for a population ``X`` of shape ``(pop, n)`` (float64); NaN/inf rows raise ConfigurationError."""
         pop, k = X.shape[0], len(self.frames)
         out = np.empty((pop, k, 12))
-        if pop >= PARALLEL_THRESHOLD:
-            bad = _fk_parallel(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, _threads())
+        threads = numba.get_num_threads() if pop >= PARALLEL_THRESHOLD else 1
+        if threads > 1:  # worker processes that share the cores should call numba.set_num_threads(1)
+            bad = _fk_parallel(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, threads)
         else:
             bad = _fk_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out)
         if bad >= 0:
             raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
         return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3))
-
-
-def _threads() -> int:
-    return numba.get_num_threads()
 
 
 @numba.njit(cache=True, inline="always")
