@@ -6,6 +6,7 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
+from .costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition, Term
 from .errors import (
     ConfigurationError,
     LimitsError,
@@ -21,12 +22,27 @@ from .errors import (
 )
 from .kinematics import FramePoses
 from .loading import load_robot, robot_from_urdf, robot_index
+from .problem import Evaluation, Problem
 from .robot import Joint, JointKind, Robot
+from .solve import IKResult, solve
+from .solvers import available_solvers
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ConfigurationError",
+    "Evaluation",
+    "IKResult",
+    "JointLimitPenalty",
+    "Motion",
+    "Objective",
+    "Orientation",
+    "Position",
+    "Problem",
+    "RelativePosition",
+    "Term",
+    "available_solvers",
+    "solve",
     "FramePoses",
     "Joint",
     "JointKind",

@@ -4,8 +4,10 @@ From a starting configuration (the best of a global metaheuristic phase), the ta
 orientation, relative position) become equality constraints ``r(x) = 0`` and the other terms (motion, ...)
 the objective, solved by SLSQP within the search box; a few projected Gauss-Newton steps on the task residuals
 then polish the error to machine precision. If the constraints cannot be met (a target out of reach), a
-bounded Levenberg-Marquardt on the task residuals gets as close as it can. The configuration returned is the
-best of the start and the refined points *by the problem's own objective*, so refinement never makes it worse.
+bounded Levenberg-Marquardt on the task residuals gets as close as it can. In parallel, L-BFGS-B minimizes the
+whole objective as it stands (with weights too small to make reaching worth its motion, the optimum of ``f``
+does not reach). The configuration returned is the best of the start and the refined points *by the
+problem's own objective*, so refinement never makes it worse.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize as scipy_minimize
 
-from .costs import JointLimitPenalty, LocalKinematics, Motion
+from .costs import JointLimitPenalty, LocalKinematics, Orientation
 from .problem import Problem
 
 
@@ -40,7 +42,7 @@ class _Residuals:
         self._key: bytes | None = None
         self._data = problem.robot.model.createData()
 
-    def _local(self, x: np.ndarray) -> LocalKinematics:
+    def local(self, x: np.ndarray) -> LocalKinematics:
         key = x.tobytes()
         if key != self._key:
             self._key, self._cache = key, LocalKinematics(self.problem.robot, x, self._data)
@@ -48,34 +50,56 @@ class _Residuals:
         return self._cache
 
     def r(self, x: np.ndarray) -> np.ndarray:
-        local = self._local(x)
+        local = self.local(x)
         return np.concatenate([t.residual(self.problem.robot, x, local) for t in self.task])
 
     def J(self, x: np.ndarray) -> np.ndarray:
-        local = self._local(x)
+        local = self.local(x)
         return np.vstack([t.jacobian(self.problem.robot, x, local) for t in self.task])
 
 
-def _regularizer(problem: Problem):
-    """The non-task part of the objective and its gradient (motion terms; others are constant in the box)."""
+def _weighted(problem: Problem, residuals: _Residuals, which: str):
+    """``x -> (f, ∇f)`` of the weighted sum of the ``"all"`` terms or the ``"regularizer"`` (non-task) terms."""
     robot = problem.robot
-    motions = [(w, t, t.indices(robot), t.previous_values(robot)) for w, t in problem.objective if isinstance(t, Motion)]
+    mask = np.ones(len(problem.names), bool) if which == "all" else ~problem.task_mask
+    weights = np.where(mask, problem.weights, 0.0)
+    terms = [(w, t) for w, (_, t), m in zip(weights, problem.objective, mask) if m]
 
     def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
-        value, grad = 0.0, np.zeros_like(x)
-        for w, term, idx, prev in motions:
-            d = x[idx] - prev
-            if term.norm == "l2":
-                norm = np.linalg.norm(d)
-                value += w * norm
-                grad[idx] += w * d / max(norm, 1e-12)
-            else:
-                scale = w / (len(idx) * np.pi)
-                value += scale * np.abs(d).sum()
-                grad[idx] += scale * np.sign(d)
+        local = residuals.local(x)
+        value = float(problem.values(x)[0] @ weights)
+        grad = np.zeros_like(x)
+        for w, term in terms:
+            grad += w * term.gradient(robot, x, local)
         return value, grad
 
     return fun
+
+
+def _reaching_is_optimal(problem: Problem, residuals: _Residuals, x: np.ndarray, tolerance: float) -> bool:
+    """Whether ``x`` (task residuals zero) also minimizes the weighted objective locally (exact penalty).
+
+    With multipliers ``λ`` of the constrained problem (``∇g = Jᵀλ``), a term ``w‖r‖`` is an exact penalty
+    when ``‖λ_term‖ < w`` (``w/2`` for orientation, whose value is ``sin(φ/2) ≈ φ/2``). Points on the box
+    boundary are not judged (``False``): the bound multipliers are not computed.
+    """
+    robot = problem.robot
+    if np.linalg.norm(residuals.r(x)) >= max(tolerance, 1e-9):
+        return False
+    if np.any(x <= robot.lower) or np.any(x >= robot.upper):
+        return False
+    _, grad = _weighted(problem, residuals, "regularizer")(x)
+    lam = np.linalg.lstsq(residuals.J(x).T, grad, rcond=None)[0]
+    start = 0
+    for weight, term in problem.objective:
+        if not term.is_task:
+            continue
+        size = len(term.residual(robot, x, residuals.local(x)))
+        limit = weight / 2 if isinstance(term, Orientation) else weight
+        if np.linalg.norm(lam[start : start + size]) >= limit:
+            return False
+        start += size
+    return True
 
 
 def gauss_newton(
@@ -143,9 +167,9 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         x = gauss_newton(residuals, x0, lower, upper, steps=max_iterations, damping=1e-6, tolerance=tolerance)
         candidates.append((x, "levenberg-marquardt"))
     elif residuals.task:
-        regularizer = _regularizer(problem)
+        # Task terms as constraints, the rest minimized: exact when the weights make the task a priority ...
         slsqp = scipy_minimize(
-            regularizer,
+            _weighted(problem, residuals, "regularizer"),
             x0,
             jac=True,
             method="SLSQP",
@@ -158,6 +182,17 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         if not np.linalg.norm(residuals.r(candidates[-1][0])) < tolerance:  # infeasible or stuck: get close
             x = gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3, tolerance=tolerance)
             candidates.append((x, "levenberg-marquardt"))
+    if regularized and not _reaching_is_optimal(problem, residuals, candidates[-1][0], tolerance):
+        # ... else the whole objective minimized as it stands: reaching costs more than it gains.
+        lbfgs = scipy_minimize(
+            _weighted(problem, residuals, "all"),
+            x0,
+            jac=True,
+            method="L-BFGS-B",
+            bounds=list(zip(lower, upper)),
+            options={"maxiter": max_iterations},
+        )
+        candidates.append((np.clip(lbfgs.x, lower, upper), "l-bfgs-b"))
     X = np.array([c[0] for c in candidates])
     evaluation = problem.evaluate(X)
     best = int(np.argmin(evaluation.cost))

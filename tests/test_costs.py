@@ -174,3 +174,23 @@ def test_wrong_population_shape_in_cost(robot):
         problem.cost(np.zeros((4, 12)))
     with pytest.raises(fw.ConfigurationError):
         problem.cost(np.full((4, 13), np.nan))
+
+
+def test_value_gradients_match_finite_differences(robot, rng):
+    """The gradients the refinement uses (L-BFGS-B on the whole objective) against the population values."""
+    prev = robot.middle
+    terms = [
+        Position("arm1_ee", [0.5, -0.2, 0.45]),
+        RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
+        Orientation("arm2_ee", Rotation.random(random_state=2).as_matrix()),
+        Motion("arm2", prev),
+        Motion("base", prev, norm="l1"),
+    ]
+    h = 1e-7
+    for x in robot.random_configurations(rng, 3):
+        for term in terms:
+            problem = Problem(robot, term)
+            g = term.gradient(robot, x, LocalKinematics(robot, x))
+            E = np.eye(robot.n) * h
+            fd = (problem.values(x + E)[:, 0] - problem.values(x - E)[:, 0]) / (2 * h)
+            np.testing.assert_allclose(g, fd, atol=1e-6, err_msg=term.name)

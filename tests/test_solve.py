@@ -98,3 +98,15 @@ def test_bounds_modes(problem):
     assert penalized.names[-1] == "joint_limits" and penalized.repair_mode == "none"
     result = solve(penalized, "de", seed=0, max_iterations=100)
     assert result.terms["joint_limits"] == 0.0
+
+
+def test_hybrid_minimizes_the_objective_when_reaching_is_not_worth_it():
+    """Position weighted 0.01, motion 1: the optimum stays at q_prev, short of the target."""
+    robot = fw.load_robot("youbot_arm")
+    prev = robot.middle
+    target = robot.frame_placement(prev, "ee").translation + [0.0, 0.0, 0.1]
+    problem = Problem(robot, 0.01 * Position("ee", target) + 1.0 * Motion("arm", prev))
+    result = solve(problem, "hybrid", seed=0)
+    assert not result.success
+    assert result.cost <= 0.01 * 0.1 + 1e-6  # no worse than not moving at all
+    assert result.terms["motion[arm]"] < 1e-3

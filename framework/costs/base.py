@@ -60,6 +60,12 @@ class Term:
         """``dr/dx`` ``(m, n)`` in joint coordinates."""
         raise NotImplementedError(f"{type(self).__name__} has no residual view")
 
+    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
+        """``d value / dx`` ``(n,)`` for terms whose value is ``‖r(x)‖`` (0 where ``r = 0``)."""
+        r = self.residual(robot, x, local)
+        norm = np.linalg.norm(r)
+        return self.jacobian(robot, x, local).T @ r / norm if norm > 0 else np.zeros_like(x)
+
     # Composition
     def __mul__(self, weight: float) -> Objective:
         return Objective(((check_weight(weight), self),))

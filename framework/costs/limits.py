@@ -40,6 +40,10 @@ class JointLimitPenalty(Term):
     def validate(self, robot: Robot) -> None:
         check_bounds(*self.limits(robot), robot.coordinate_names)
 
+    def gradient(self, robot: Robot, x: np.ndarray, local) -> np.ndarray:
+        lower, upper = self.limits(robot)
+        return self.weight * ((x > upper).astype(float) - (x < lower).astype(float))
+
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
         lower, upper = self.limits(robot)
         violation = np.maximum(0.0, lower - X) + np.maximum(0.0, X - upper)

@@ -69,6 +69,13 @@ class Motion(Term):
         """``x_g − x_g^prev`` (its L2 norm is the ``"l2"`` value)."""
         return x[self.indices(robot)] - self.previous_values(robot)
 
+    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
+        if self.norm == "l2":
+            return super().gradient(robot, x, local)
+        idx, g = self.indices(robot), np.zeros_like(x)
+        g[idx] = np.sign(x[idx] - self.previous_values(robot)) / (len(idx) * np.pi)
+        return g
+
     def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         J = np.zeros((len(self.indices(robot)), robot.n))
         J[np.arange(J.shape[0]), self.indices(robot)] = 1.0

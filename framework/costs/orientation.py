@@ -76,6 +76,14 @@ class Orientation(Term):
         """``log(R_targetᵀ R)`` (3,) [rad]: zero exactly when the value is zero, smooth for refinement."""
         return pin.log3(self.target.T @ local.placement(self.frame).rotation)
 
+    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
+        """Of the value ``sin(φ/2)``, ``φ = ‖log(R_targetᵀ R)‖``."""
+        r = self.residual(robot, x, local)
+        phi = np.linalg.norm(r)
+        if phi == 0:
+            return np.zeros_like(x)
+        return 0.5 * np.cos(phi / 2) * (self.jacobian(robot, x, local).T @ r) / phi
+
     def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         R = local.placement(self.frame).rotation
         return pin.Jlog3(self.target.T @ R) @ R.T @ local.frame_jacobian(self.frame)[3:]
