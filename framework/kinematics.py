@@ -4,7 +4,8 @@ The kernel reads the Pinocchio model (joint placements, joint kinds and axes, fr
 tables, and composes ``oMi = oMparent · jointPlacement · M(x)`` exactly as ``pinocchio.forwardKinematics``
 and ``pinocchio.updateFramePlacements`` do. Only the joints on the paths from the root to the requested frames
 are visited. The loop over the population is compiled with numba (cached on disk, so the compile cost is paid
-once per machine, never per solve).
+once per machine, never per solve). It runs on one thread: a threaded kernel gained < 2x at pop 1000 on two
+idle cores and lost 50x when the cores were shared with other processes (benchmark workers).
 """
 
 from __future__ import annotations
@@ -27,8 +28,6 @@ _KIND_CODE = {
     JointKind.PRISMATIC: _PRISMATIC,
     JointKind.PLANAR: _PLANAR,
 }
-#: Populations at least this large use the multi-threaded kernel.
-PARALLEL_THRESHOLD = 512
 
 
 class FramePoses(NamedTuple):
@@ -100,11 +99,7 @@ class PopulationKinematics:
         """Poses for a population ``X`` of shape ``(pop, n)`` (float64); NaN/inf rows raise ConfigurationError."""
         pop, k = X.shape[0], len(self.frames)
         out = np.empty((pop, k, 12))
-        threads = numba.get_num_threads() if pop >= PARALLEL_THRESHOLD else 1
-        if threads > 1:  # worker processes that share the cores should call numba.set_num_threads(1)
-            bad = _fk_parallel(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, threads)
-        else:
-            bad = _fk_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out)
+        bad = _fk_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out)
         if bad >= 0:
             raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
         return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3))
@@ -191,18 +186,3 @@ def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
             return b
         _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
     return -1
-
-
-@numba.njit(cache=True, parallel=True)
-def _fk_parallel(X, jint, jgeo, fslot, fgeo, out, chunks):
-    """FK of every row of ``X`` over ``chunks`` threads; returns a row holding NaN/inf, or -1."""
-    size = (X.shape[0] + chunks - 1) // chunks
-    bad = np.full(chunks, -1)
-    for t in numba.prange(chunks):  # one scratch buffer per chunk, not per configuration
-        W = np.empty((jint.shape[0], 12))
-        for b in range(t * size, min((t + 1) * size, X.shape[0])):
-            if not np.all(np.isfinite(X[b])):
-                bad[t] = b
-                break
-            _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
-    return bad.max()

@@ -81,7 +81,7 @@ def test_planar_joint_and_unaligned_axes(rng):
     assert_matches_pinocchio(robot, rng, frames=["tip", "slider", "body"])
 
 
-def test_large_populations_use_the_parallel_kernel_and_agree(rng):
+def test_large_populations_agree_with_batches(rng):
     robot = fw.load_robot("youbot_dual_mobile")
     X = robot.random_configurations(rng, 2000)
     whole = robot.frame_poses(X)
