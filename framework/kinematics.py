@@ -104,6 +104,21 @@ class PopulationKinematics:
             raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
         return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3))
 
+    def jacobians(self, X: np.ndarray, n: int) -> tuple[FramePoses, np.ndarray]:
+        """Poses and frame Jacobians for a population ``X`` ``(pop, n)``.
+
+        Returns the poses and ``J`` of shape ``(pop, k, 6, n)``: rows 0-2 the derivative of the frame origin's
+        world position [m per coordinate unit], rows 3-5 the world angular velocity per coordinate rate
+        (Pinocchio's ``LOCAL_WORLD_ALIGNED`` convention, in joint coordinates).
+        """
+        pop, k = X.shape[0], len(self.frames)
+        out = np.empty((pop, k, 12))
+        J = np.zeros((pop, k, 6, n))
+        bad = _jac_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, J)
+        if bad >= 0:
+            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3)), J
+
 
 @numba.njit(cache=True, inline="always")
 def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
@@ -185,4 +200,42 @@ def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
         if not np.all(np.isfinite(X[b])):
             return b
         _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
+    return -1
+
+
+@numba.njit(cache=True)
+def _jac_serial(X, jint, jgeo, fslot, fgeo, out, J):
+    """FK and frame Jacobians of every row of ``X`` (``J`` zeroed by the caller); first bad row or -1."""
+    W = np.empty((jint.shape[0], 12))
+    for b in range(X.shape[0]):
+        x = X[b]
+        if not np.all(np.isfinite(x)):
+            return b
+        _fk_one(x, jint, jgeo, fslot, fgeo, out[b], W)
+        for f in range(fslot.shape[0]):
+            px, py, pz = out[b, f, 9], out[b, f, 10], out[b, f, 11]
+            j = fslot[f]
+            while j > 0:
+                kind, i = jint[j, 1], jint[j, 2]
+                w = W[j]
+                ux, uy, uz = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14]
+                if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
+                    c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+                    for r in range(3):
+                        J[b, f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
+                        J[b, f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
+                    ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
+                # world axis a = R_j u (the joint's own rotation leaves u fixed)
+                ax = w[0] * ux + w[1] * uy + w[2] * uz
+                ay = w[3] * ux + w[4] * uy + w[5] * uz
+                az = w[6] * ux + w[7] * uy + w[8] * uz
+                if kind == 1:  # prismatic: translation along a
+                    J[b, f, 0, i], J[b, f, 1, i], J[b, f, 2, i] = ax, ay, az
+                else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
+                    dx, dy, dz = px - w[9], py - w[10], pz - w[11]
+                    J[b, f, 0, i] = ay * dz - az * dy
+                    J[b, f, 1, i] = az * dx - ax * dz
+                    J[b, f, 2, i] = ax * dy - ay * dx
+                    J[b, f, 3, i], J[b, f, 4, i], J[b, f, 5, i] = ax, ay, az
+                j = jint[j, 0]
     return -1

@@ -308,6 +308,18 @@ class Robot:
             frames = (frames,)
         return self._kinematics(tuple(frames))(self.check_population(X, finite=False))
 
+    def frame_jacobians(self, X: np.ndarray, frames: Sequence[str] | str | None = None) -> tuple[FramePoses, np.ndarray]:
+        """Poses and world-aligned frame Jacobians ``(pop, k, 6, n)`` in joint coordinates, for a population.
+
+        Rows 0-2: derivative of the frame origin [m / coordinate unit]; rows 3-5: angular velocity (world axes).
+        Equal to Pinocchio's ``LOCAL_WORLD_ALIGNED`` frame Jacobian times :meth:`coordinate_jacobian`.
+        """
+        if frames is None:
+            frames = self.end_effectors
+        elif isinstance(frames, str):
+            frames = (frames,)
+        return self._kinematics(tuple(frames)).jacobians(self.check_population(X, finite=False), self.n)
+
     def _kinematics(self, frames: tuple[str, ...]):
         cache = self.__dict__.setdefault("_programs", {})
         if frames not in cache:

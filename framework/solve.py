@@ -15,6 +15,7 @@ import numpy as np
 
 from .errors import SolverError
 from .problem import Problem
+from .multistart import multistart_lm
 from .refine import refine
 from .solvers import available_solvers, minimize
 
@@ -75,7 +76,8 @@ def solve(
 
     Args:
         problem: robot + weighted objective + bounds handling.
-        solver: a registered metaheuristic (see :func:`framework.solvers.available_solvers`) or ``"hybrid"``.
+        solver: a registered metaheuristic (see :func:`framework.solvers.available_solvers`), ``"hybrid"``, or
+            ``"multistart_lm"`` (population Levenberg-Marquardt, for problems of task terms only: pose IK).
         seed: seed or generator; the same seed gives the same result.
         max_iterations: iteration budget (the hybrid: of its refinement; its global phase has its own).
         population: candidates per iteration.
@@ -94,8 +96,11 @@ def solve(
     start = time.perf_counter()
     if solver == "hybrid":
         return _hybrid(problem, rng, population, tolerance, initial, dict(options or {}), start)
+    if solver == "multistart_lm":
+        return _multistart(problem, rng, population, max_iterations, tolerance, initial, dict(options or {}), start)
     if solver not in available_solvers():
-        raise SolverError(f"unknown solver {solver!r}; available: {', '.join(['hybrid', *available_solvers()])}")
+        known = ", ".join(["hybrid", "multistart_lm", *available_solvers()])
+        raise SolverError(f"unknown solver {solver!r}; available: {known}")
 
     callback = None
     if stop_at_tolerance:
@@ -159,6 +164,18 @@ def _hybrid(problem, rng, population, tolerance, initial, options, start) -> IKR
     settings.update(refinement=best.method, restarts=restarts)
     return _result(problem, best.x, stop, iterations + 1 + restarts, evaluations, start, history, "hybrid",
                    {**settings, "population": population}, tolerance)
+
+
+def _multistart(problem, rng, population, max_iterations, tolerance, initial, options, start) -> IKResult:
+    unknown = set(options) - {"time_budget", "stall"}
+    if unknown:
+        raise SolverError(f"unknown multistart_lm option(s) {sorted(unknown)}; known: ['stall', 'time_budget']")
+    run = multistart_lm(problem, rng, starts=population, initial=initial, tolerance=tolerance,
+                        max_iterations=max_iterations, **options)
+    stop = "tolerance" if run.task_error <= tolerance else "max_iterations"
+    settings = {"starts": population, "max_iterations": max_iterations, "restarts": run.restarts, **options}
+    return _result(problem, run.x, stop, run.iterations, run.evaluations, start, np.array([run.cost]),
+                   "multistart_lm", settings, tolerance)
 
 
 def _result(problem, x, stop, iterations, evaluations, start, history, solver, settings, tolerance) -> IKResult:

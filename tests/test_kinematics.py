@@ -99,3 +99,29 @@ def test_single_configuration_and_named_access():
     np.testing.assert_allclose(poses.rotation("arm2_ee")[0], ref.rotation, atol=1e-12)
     with pytest.raises(fw.UnknownFrameError):
         poses.position("arm3_ee")
+
+
+@pytest.mark.parametrize("name", ["youbot_dual_mobile", "stanford_arm", "baxter_dual"])
+def test_population_jacobians_equal_pinocchio(name, rng):
+    robot = fw.load_robot(name)
+    X = robot.random_configurations(rng, 50)
+    poses, J = robot.frame_jacobians(X)
+    data = robot.model.createData()
+    for b, x in enumerate(X):
+        q = robot.to_pinocchio(x)
+        for k, frame in enumerate(robot.end_effectors):
+            ref = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(frame), pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(J[b, k], ref @ robot.coordinate_jacobian(x), atol=1e-12)
+    np.testing.assert_allclose(poses.positions, robot.frame_poses(X).positions, atol=0)
+
+
+def test_population_jacobians_with_planar_and_unaligned_joints(rng):
+    robot = fw.robot_from_urdf(PLANAR_URDF)
+    X = robot.random_configurations(rng, 30)
+    _, J = robot.frame_jacobians(X, ["tip", "slider"])
+    data = robot.model.createData()
+    for b, x in enumerate(X):
+        for k, frame in enumerate(["tip", "slider"]):
+            ref = pin.computeFrameJacobian(robot.model, data, robot.to_pinocchio(x), robot.frame_id(frame),
+                                           pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(J[b, k], ref @ robot.coordinate_jacobian(x), atol=1e-12)

@@ -110,3 +110,22 @@ def test_hybrid_minimizes_the_objective_when_reaching_is_not_worth_it():
     assert not result.success
     assert result.cost <= 0.01 * 0.1 + 1e-6  # no worse than not moving at all
     assert result.terms["motion[arm]"] < 1e-3
+
+
+def test_multistart_lm_solves_full_poses_and_is_deterministic(rng):
+    robot = fw.load_robot("puma560")
+    x_true = robot.random_configurations(rng, 1)[0]
+    target = robot.frame_placement(x_true, "ee")
+    problem = Problem(robot, fw.Position("ee", target.translation) + fw.Orientation("ee", target.rotation))
+    a = solve(problem, "multistart_lm", seed=3, population=32, tolerance=1e-9, max_iterations=500)
+    b = solve(problem, "multistart_lm", seed=3, population=32, tolerance=1e-9, max_iterations=500)
+    assert a.success and a.task_error <= 1e-9
+    np.testing.assert_array_equal(a.configuration, b.configuration)
+    reached = robot.frame_placement(a.configuration, "ee")
+    np.testing.assert_allclose(reached.translation, target.translation, atol=1e-9)
+    np.testing.assert_allclose(reached.rotation, target.rotation, atol=1e-8)
+
+
+def test_multistart_lm_refuses_non_task_terms(problem):
+    with pytest.raises(fw.SolverError, match="hybrid"):
+        solve(problem, "multistart_lm")
