@@ -148,6 +148,28 @@ def gauss_newton(
     return x
 
 
+def _constrained(
+    problem: Problem, residuals: _Residuals, x0: np.ndarray, tolerance: float, max_iterations: int
+) -> list[tuple[np.ndarray, str]]:
+    """SLSQP on the non-task terms subject to ``r(x) = 0`` in the box, Gauss-Newton polish; LM if that fails."""
+    lower, upper = problem.robot.lower, problem.robot.upper
+    slsqp = scipy_minimize(
+        _weighted(problem, residuals, "regularizer"),
+        x0,
+        jac=True,
+        method="SLSQP",
+        bounds=list(zip(lower, upper)),
+        constraints=[{"type": "eq", "fun": residuals.r, "jac": residuals.J}],
+        options={"maxiter": max_iterations, "ftol": 1e-12},
+    )
+    x = gauss_newton(residuals, np.clip(slsqp.x, lower, upper), lower, upper, steps=10)
+    out = [(x, "slsqp+gauss-newton")]
+    if not np.linalg.norm(residuals.r(x)) < tolerance:  # infeasible or stuck: get as close as possible
+        x = gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3, tolerance=tolerance)
+        out.append((x, "levenberg-marquardt"))
+    return out
+
+
 def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_iterations: int = 100) -> Refinement:
     """Refine ``x0`` locally: minimize the non-task terms subject to the task residuals being zero.
 
@@ -168,22 +190,9 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         candidates.append((x, "levenberg-marquardt"))
     elif residuals.task:
         # Task terms as constraints, the rest minimized: exact when the weights make the task a priority ...
-        slsqp = scipy_minimize(
-            _weighted(problem, residuals, "regularizer"),
-            x0,
-            jac=True,
-            method="SLSQP",
-            bounds=list(zip(lower, upper)),
-            constraints=[{"type": "eq", "fun": residuals.r, "jac": residuals.J}],
-            options={"maxiter": max_iterations, "ftol": 1e-12},
-        )
-        x = np.clip(slsqp.x, lower, upper)
-        candidates.append((gauss_newton(residuals, x, lower, upper, steps=10), "slsqp+gauss-newton"))
-        if not np.linalg.norm(residuals.r(candidates[-1][0])) < tolerance:  # infeasible or stuck: get close
-            x = gauss_newton(residuals, x0, lower, upper, steps=50, damping=1e-3, tolerance=tolerance)
-            candidates.append((x, "levenberg-marquardt"))
+        candidates += _constrained(problem, residuals, x0, tolerance, max_iterations)
     if regularized and not _reaching_is_optimal(problem, residuals, candidates[-1][0], tolerance):
-        # ... else the whole objective minimized as it stands: reaching costs more than it gains.
+        # ... else the whole objective minimized as it stands: reaching costs more than it gains ...
         lbfgs = scipy_minimize(
             _weighted(problem, residuals, "all"),
             x0,
@@ -192,7 +201,10 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
             bounds=list(zip(lower, upper)),
             options={"maxiter": max_iterations},
         )
-        candidates.append((np.clip(lbfgs.x, lower, upper), "l-bfgs-b"))
+        x = np.clip(lbfgs.x, lower, upper)
+        candidates.append((x, "l-bfgs-b"))
+        if residuals.task:  # ... or the constrained solve failed from x0 but succeeds from closer in
+            candidates += [(c, f"l-bfgs-b+{m}") for c, m in _constrained(problem, residuals, x, tolerance, max_iterations)]
     X = np.array([c[0] for c in candidates])
     evaluation = problem.evaluate(X)
     best = int(np.argmin(evaluation.cost))
