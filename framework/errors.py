@@ -48,3 +48,11 @@ class SolverError(MetaikError):
 
 class ResourceError(MetaikError):
     """A packaged resource (robot index, task file) cannot be found."""
+
+
+class RecordingError(MetaikError):
+    """A recording cannot be written, read or replayed (missing file, not an .rrd file)."""
+
+
+class ViewerError(MetaikError):
+    """The meshcat viewer or the headless browser cannot do what was asked."""

@@ -1,0 +1,750 @@
+"""Recordings of runs in rerun (``.rrd``): the robot posed for every solution, targets, paths, costs.
+
+One :class:`Recorder` writes one file per run and flushes after every logged solution, so a run that crashes
+still leaves a readable file of what it solved. What a recording holds (entity paths, timelines)::
+
+    world/robot/skeleton            links as line segments between frame origins    timeline solution / waypoint
+    world/robot/joints              joint origins (points)
+    world/robot/frames/<frame>      end-effector axes (Transform3D + TransformAxes3D)
+    world/robot/visuals/<k>_<link>  the URDF's meshes and primitives (static), posed by a Transform3D
+    world/targets                   target points of the position / relative-position terms
+    world/paths/desired/<frame>     desired end-effector paths (tracking)
+    world/paths/tracked/<frame>     end-effector paths the joint path really draws (tracking)
+    solutions/<name>/cost           best cost after each solver iteration            timeline iteration
+    solutions/<name>/terms/<term>   unweighted terms: final values, or every iteration with term_logger()
+    solutions/<name>/settings       solver, settings and result as a markdown TextDocument (static)
+    summary/task_error, summary/cost                                                 timeline solution
+    tracking/<name>/<error>         per-point errors along a tracked path             timeline waypoint
+    robot, description, task        the robot, the run and the task file as markdown (static)
+
+Recording a task file's run as it goes::
+
+    with Recorder.for_task("run.rrd", task) as recorder:
+        for case in task.cases:
+            recorder.log_case(case, solve(case.problem, "hybrid"))    # or a track(...) result
+
+:func:`replay` opens a file in the rerun viewer (``metaik replay run.rrd``); :func:`read_recording` reads one
+back with rerun's own reader, for scripts and tests. The robot is drawn as :class:`framework.viewer.RobotDrawing`
+draws it: links as segments between frame origins, plus the URDF's meshes where their files resolve locally
+(nothing is ever downloaded).
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .errors import RecordingError
+from .viewer import (
+    DESIRED_COLOR,
+    JOINT_COLOR,
+    LINK_COLOR,
+    TARGET_COLOR,
+    TRACKED_COLOR,
+    VISUAL_COLOR,
+    RobotDrawing,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    import argparse
+
+    from .problem import Problem
+    from .robot import Robot
+    from .solve import IKResult
+    from .taskfile import Case, TaskFile
+    from .tracking import TrackingResult
+
+#: Mesh formats rerun's Asset3D reads directly; others (Collada .dae, ...) are converted with trimesh.
+ASSET_FORMATS = {
+    ".stl": "model/stl",
+    ".obj": "model/obj",
+    ".glb": "model/gltf-binary",
+    ".gltf": "model/gltf+json",
+}
+
+
+def mesh_bytes(path: Path) -> tuple[bytes, str]:
+    """The contents and media type of a mesh for rerun: the file itself, or a GLB converted by trimesh."""
+    suffix = path.suffix.lower()
+    if suffix in ASSET_FORMATS:
+        return path.read_bytes(), ASSET_FORMATS[suffix]
+    import trimesh
+
+    scene = trimesh.load(str(path), force="scene")
+    return scene.export(file_type="glb"), ASSET_FORMATS[".glb"]
+
+
+# ---------------------------------------------------------------------------------------------- recorder
+def entity_name(name: str) -> str:
+    """A readable entity-path part for a case or term name (``"target 1"`` -> ``"target_1"``)."""
+    return re.sub(r"[^A-Za-z0-9_.\-]+", "_", str(name)).strip("_") or "unnamed"
+
+
+class Recorder:
+    """Writes one rerun recording (``.rrd``) of a run; use it as a context manager.
+
+    Every ``log_*`` call is flushed to disk before it returns, so the file is readable at any time and
+    survives a crash of the run. Solutions are numbered on the ``solution`` timeline; solver iterations are on
+    the ``iteration`` timeline, tracked paths on the ``waypoint`` timeline (see the module docstring).
+
+    Args:
+        path: the ``.rrd`` file to write (parent folders are created; an existing file is replaced).
+        robot: the robot every solution belongs to.
+        frames: frames drawn as axes (default: the end-effectors).
+        application: rerun application id.
+        description: markdown shown as the recording's ``description`` document.
+
+    Example::
+
+        with Recorder("run.rrd", robot) as rec:
+            result = solve(problem, "hybrid")
+            rec.log_solution(result, problem=problem, name="target 1")
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        robot: Robot,
+        *,
+        frames: Sequence[str] | None = None,
+        application: str = "metaik",
+        description: str | None = None,
+    ):
+        import rerun as rr
+
+        self.path = Path(path)
+        self.robot = robot
+        self.drawing = RobotDrawing(robot, frames)
+        self._used: set[str] = set()
+        self._pending: dict[str, str] = {}  # name -> slug reserved by a term logger
+        self._traced: dict[str, int] = {}  # slug -> last iteration a term logger logged
+        self._count = 0
+        self._waypoints = 0
+        self._rr = rr
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.stream = rr.RecordingStream(application)
+            self.stream.save(self.path)
+        except Exception as err:  # rerun raises its own RuntimeError / OSError variants
+            raise RecordingError(f"cannot write the recording {self.path}: {err}") from err
+        self.stream.set_log_time_enabled(False)
+        self._log_robot(description)
+        self.stream.flush()
+
+    @classmethod
+    def for_task(
+        cls, path: str | Path, task: TaskFile, *, settings: Mapping[str, Any] | None = None
+    ) -> Recorder:
+        """A recorder for a run of a task file: its description, the settings used and the file itself."""
+        lines = [f"# {task.name}", "", task.description, "", f"task file: `{task.path}`", ""]
+        lines += [f"- {k}: {v}" for k, v in (settings if settings is not None else task.solver).items()]
+        recorder = cls(path, task.robot, description="\n".join(lines))
+        try:
+            text = Path(task.path).read_text()
+        except OSError:
+            text = None
+        if text is not None:
+            recorder.log_text("task", f"```toml\n{text}\n```")
+        return recorder
+
+    def log_case(self, case: Case, result: IKResult | TrackingResult) -> str:
+        """Log one solved case of a task file: a tracking result or an IK solve (by its name)."""
+        if case.is_tracking:
+            return self.log_tracking(result, task=case.builder, name=case.name)
+        return self.log_solution(result, problem=case.problem, name=case.name)
+
+    # ------------------------------------------------------------------ context manager
+    def __enter__(self) -> Recorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Flush and close the file (idempotent)."""
+        if self.stream is not None:
+            self.stream.flush()
+            self.stream.disconnect()
+            self.stream = None
+
+    @property
+    def solutions(self) -> int:
+        """Number of solutions and paths logged so far."""
+        return self._count
+
+    # ------------------------------------------------------------------ static content
+    def _log_robot(self, description: str | None) -> None:
+        rr, stream, robot = self._rr, self.stream, self.robot
+        stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for k, visual in enumerate(self.drawing.visuals):
+            entity = f"world/robot/visuals/{k}_{entity_name(visual.link)}"
+            color = _rgb255(visual.rgba)
+            if visual.kind == "mesh":
+                try:
+                    contents, media_type = mesh_bytes(visual.path)
+                except Exception as err:  # noqa: BLE001 - a mesh trimesh cannot read is skipped, not fatal
+                    warnings.warn(f"mesh {visual.path} not recorded: {err}", stacklevel=3)
+                    continue
+                stream.log(entity, rr.Asset3D(contents=contents, media_type=media_type), static=True)
+            elif visual.kind == "box":
+                stream.log(entity, rr.Boxes3D(sizes=[visual.size], colors=[color]), static=True)
+            elif visual.kind == "cylinder":
+                stream.log(
+                    entity,
+                    rr.Cylinders3D(lengths=[visual.size[1]], radii=[visual.size[0]], colors=[color]),
+                    static=True,
+                )
+            else:
+                stream.log(
+                    entity,
+                    rr.Ellipsoids3D(half_sizes=[np.repeat(visual.size[0], 3)], colors=[color]),
+                    static=True,
+                )
+        lines = [
+            f"# {robot.name}",
+            "",
+            f"{robot.n} joint coordinates: {', '.join(robot.coordinate_names)}",
+            "",
+            f"end-effectors: {', '.join(robot.end_effectors)}",
+            "",
+            "groups: " + ", ".join(f"{g} {np.asarray(i).tolist()}" for g, i in robot.groups.items()),
+        ]
+        if self.drawing.missing:
+            lines += [
+                "",
+                "meshes not found locally (drawn as segments only): " + ", ".join(self.drawing.missing),
+            ]
+        stream.log("robot", rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN), static=True)
+        if description:
+            stream.log(
+                "description", rr.TextDocument(description, media_type=rr.MediaType.MARKDOWN), static=True
+            )
+
+    def log_text(self, entity: str, text: str, *, markdown: bool = True) -> None:
+        """A static text document (e.g. the task file) at ``entity``."""
+        media = self._rr.MediaType.MARKDOWN if markdown else self._rr.MediaType.TEXT
+        self._require().log(entity, self._rr.TextDocument(text, media_type=media), static=True)
+        self.stream.flush()
+
+    # ------------------------------------------------------------------ poses
+    def _log_poses(self, M: np.ndarray, timeline: str, times: Sequence[int]) -> None:
+        """The robot posed at every configuration of ``M`` (:meth:`RobotDrawing.world_frames`) at ``times``."""
+        rr, stream, drawing = self._rr, self.stream, self.drawing
+        segments, joints = drawing.segments(M), drawing.joint_origins(M)
+        frames, visuals = drawing.frame_placements(M), drawing.visual_placements(M)
+        axis_length = 0.25 * _reach(segments[0]) if segments.shape[1] else 0.1
+        for k, t in enumerate(times):
+            stream.set_time(timeline, sequence=int(t))
+            stream.log(
+                "world/robot/skeleton", rr.LineStrips3D(segments[k], colors=[LINK_COLOR], radii=[0.008])
+            )
+            stream.log("world/robot/joints", rr.Points3D(joints[k], colors=[JOINT_COLOR], radii=[0.012]))
+            for name, T in zip(drawing.frames, frames[k]):
+                stream.log(
+                    f"world/robot/frames/{entity_name(name)}",
+                    rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]),
+                    rr.TransformAxes3D(axis_length),
+                )
+            for j, (visual, T) in enumerate(zip(drawing.visuals, visuals[k])):
+                scale = visual.size if visual.kind == "mesh" else None
+                stream.log(
+                    f"world/robot/visuals/{j}_{entity_name(visual.link)}",
+                    rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3], scale=scale),
+                )
+
+    def _entity(self, name: str | None, kind: str) -> str:
+        """A unique entity-path part for a logged solution or path (reusing one a term logger reserved)."""
+        if name is not None and name in self._pending:
+            return self._pending.pop(name)
+        base = entity_name(name if name is not None else f"{kind}_{self._count}")
+        slug, k = base, 1
+        while slug in self._used:
+            k += 1
+            slug = f"{base}_{k}"
+        self._used.add(slug)
+        return slug
+
+    def _require(self):
+        if self.stream is None:
+            raise RecordingError(f"the recording {self.path} is closed")
+        return self.stream
+
+    # ------------------------------------------------------------------ IK solutions
+    def log_solution(
+        self,
+        result: IKResult,
+        *,
+        problem: Problem | None = None,
+        targets: Mapping[str, Sequence[float]] | np.ndarray | None = None,
+        name: str | None = None,
+    ) -> str:
+        """Log one IK solve: the posed robot, its targets, the convergence history and the final terms.
+
+        Args:
+            result: what :func:`framework.solve.solve` returned.
+            problem: the solved problem; its position targets (and the relative-position targets at the
+                solution) are drawn, and the term weights go into the settings document.
+            targets: target points to draw instead, ``label -> (3,)`` or an array ``(k, 3)`` [m, world].
+            name: the case name (entity ``solutions/<name>``); default ``solution_<k>``.
+
+        Returns:
+            the entity-path part used for this solution.
+        """
+        rr, stream = self._rr, self._require()
+        slug = self._entity(name, "solution")
+        traced_until = self._traced.pop(slug, -1)
+        index = self._count
+        x = np.asarray(result.configuration, dtype=float)
+        stream.reset_time()
+        self._log_poses(self.drawing.world_frames(x), "solution", [index])
+        labels, points = _targets(self.robot, x, problem, targets)
+        stream.set_time("solution", sequence=index)
+        stream.log(
+            "world/targets",
+            rr.Points3D(points.reshape(-1, 3), labels=labels, colors=[TARGET_COLOR], radii=[0.015]),
+        )
+        stream.log("summary/name", rr.TextDocument(name or slug))
+        stream.log("summary/task_error", rr.Scalars(result.task_error))
+        stream.log("summary/cost", rr.Scalars(result.cost))
+        stream.reset_time()
+        history = np.asarray(result.history, dtype=float)
+        if history.size:
+            iterations = rr.TimeColumn("iteration", sequence=np.arange(history.size))
+            stream.send_columns(
+                f"solutions/{slug}/cost", indexes=[iterations], columns=rr.Scalars.columns(scalars=history)
+            )
+        last = max(history.size - 1, 0)
+        if last > traced_until:  # the final values, unless a term logger already logged this iteration
+            for term, value in result.terms.items():
+                stream.set_time("iteration", sequence=last)
+                stream.log(f"solutions/{slug}/terms/{entity_name(term)}", rr.Scalars(float(value)))
+        stream.reset_time()
+        text = _settings_markdown(name or slug, result, problem)
+        stream.log(
+            f"solutions/{slug}/settings", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True
+        )
+        stream.flush()
+        self._count += 1
+        return slug
+
+    def term_logger(self, problem: Problem, name: str) -> Callable[[int, float, np.ndarray], bool]:
+        """A ``callback(iteration, best_f, best_x)`` for :func:`framework.solvers.minimize` that logs every
+        term of the best member at each iteration (entity ``solutions/<name>/terms/<term>``).
+
+        Log the solve afterwards with :meth:`log_solution` under the same ``name``. The callback never asks
+        the solver to stop.
+        """
+        stream = self._require()
+        slug = self._entity(name, "solution")
+        self._pending[name] = slug
+        rr, names = self._rr, [entity_name(t) for t in problem.names]
+
+        self._traced[slug] = -1
+
+        def callback(iteration: int, best_f: float, best_x: np.ndarray) -> bool:
+            values = problem.evaluate(best_x).values[0]
+            self._traced[slug] = int(iteration) - 1
+            stream.set_time("iteration", sequence=int(iteration) - 1)
+            for term, value in zip(names, values):
+                stream.log(f"solutions/{slug}/terms/{term}", rr.Scalars(float(value)))
+            stream.reset_time()
+            return False
+
+        return callback
+
+    # ------------------------------------------------------------------ paths
+    def log_path(
+        self,
+        path: np.ndarray,
+        *,
+        desired: Mapping[str, np.ndarray] | None = None,
+        errors: Mapping[str, np.ndarray] | None = None,
+        name: str | None = None,
+        settings: Mapping[str, Any] | None = None,
+    ) -> str:
+        """Log a joint path: the robot posed at every waypoint, desired and tracked paths, per-point errors.
+
+        Args:
+            path: joint path ``(K, n)`` [rad / m], one configuration per waypoint.
+            desired: frame -> desired positions ``(K', 3)`` [m, world], ``K' >= K`` (a path stopped early
+                still shows all of it); these frames' tracked paths are drawn (default: the end-effectors').
+            errors: label -> per-point values ``(K,)`` (e.g. ``"position"`` [m]), on the ``waypoint`` timeline;
+                a label may hold ``/`` (``"terms/position"``).
+
+        Paths logged one after the other follow each other on the ``waypoint`` timeline (the second starts
+        where the first ended), so scrubbing it replays the whole run.
+            name: entity-path part (``tracking/<name>``); default ``path_<k>``.
+            settings: shown in the ``tracking/<name>/settings`` document.
+        """
+        rr, stream, robot = self._rr, self._require(), self.robot
+        Q = robot.check_population(path, "joint path")
+        K = Q.shape[0]
+        slug = self._entity(name, "path")
+        index = self._count
+        desired = {f: np.asarray(p, dtype=float).reshape(-1, 3) for f, p in (desired or {}).items()}
+        short = [f for f, p in desired.items() if len(p) < K]
+        if short:
+            raise RecordingError(f"desired paths of {short} have fewer points than the joint path ({K})")
+        frames = list(desired) or list(robot.end_effectors)
+        M = self.drawing.world_frames(Q)
+        tracked = M[:, [robot.frame_id(f) for f in frames]][..., :3, 3]  # (K, k, 3)
+        stream.reset_time()
+        stream.set_time("solution", sequence=index)
+        first = self._waypoints  # paths follow each other on the waypoint timeline
+        stream.set_time("waypoint", sequence=first)
+        for frame, points in desired.items():
+            stream.log(
+                f"world/paths/desired/{entity_name(frame)}",
+                rr.LineStrips3D([points], colors=[DESIRED_COLOR], radii=[0.004]),
+            )
+        for j, frame in enumerate(frames):
+            stream.log(
+                f"world/paths/tracked/{entity_name(frame)}",
+                rr.LineStrips3D([tracked[:, j]], colors=[TRACKED_COLOR], radii=[0.003]),
+            )
+        stream.reset_time()
+        for k in range(K):  # the desired points of each waypoint
+            if desired:
+                stream.set_time("waypoint", sequence=first + k)
+                stream.log(
+                    "world/targets",
+                    rr.Points3D(
+                        [p[k] for p in desired.values()],
+                        labels=list(desired),
+                        colors=[TARGET_COLOR],
+                        radii=[0.012],
+                    ),
+                )
+        stream.reset_time()
+        self._log_poses(M, "waypoint", range(first, first + K))
+        stream.reset_time()
+        waypoints = rr.TimeColumn("waypoint", sequence=np.arange(first, first + K))
+        for label, values in (errors or {}).items():
+            values = np.asarray(values, dtype=float).reshape(-1)
+            if values.shape != (K,):
+                raise RecordingError(
+                    f"errors[{label!r}] must have one value per waypoint ({K}); got {values.shape}"
+                )
+            entity = "/".join(entity_name(part) for part in label.split("/"))
+            stream.send_columns(
+                f"tracking/{slug}/{entity}", indexes=[waypoints], columns=rr.Scalars.columns(scalars=values)
+            )
+        span = f"{K} waypoints (timeline waypoint {first}..{first + K - 1})"
+        lines = [f"# {name or slug}", "", f"{span}, frames {', '.join(frames)}", ""]
+        lines += [f"- {k}: {v}" for k, v in (settings or {}).items()]
+        for label, values in (errors or {}).items():
+            v = np.asarray(values, dtype=float)
+            lines.append(f"- {label}: mean {v.mean():.3e}, max {v.max():.3e}")
+        stream.log(
+            f"tracking/{slug}/settings",
+            rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN),
+            static=True,
+        )
+        stream.flush()
+        self._count += 1
+        self._waypoints += K
+        return slug
+
+    def log_tracking(self, tracking: TrackingResult, *, task: Any = None, name: str | None = None) -> str:
+        """Log what :func:`framework.tracking.track` returned (see :meth:`log_path`).
+
+        The desired paths are read from the task of every waypoint, rebuilt as the tracker built it: each
+        position term's target, and for a relative-position term the target of its second frame at the
+        solution. The per-point errors are the result's ``position_error``, ``orientation_error`` (with
+        orientations), ``motion_error``, ``task_error`` and every unweighted term (``terms/<name>``).
+
+        Args:
+            tracking: the tracking result.
+            task: what was tracked: a :class:`~framework.tracking.TrackingTask` or a builder
+                ``(k, position, rotation, previous) -> Objective`` (a task file case's ``builder``); default:
+                the result's own ``TrackingTask``, else the first end-effector following the trajectory.
+            name: entity-path part (``tracking/<name>``); default: the trajectory's name.
+        """
+        Q = np.asarray(tracking.configurations, dtype=float)
+        trajectory = tracking.trajectory
+        desired = _desired_paths(
+            self.robot, tracking, task if task is not None else tracking.settings.get("task")
+        )
+        errors = {"position_error": tracking.position_error}
+        if trajectory.has_orientation:
+            errors["orientation_error"] = tracking.orientation_error
+        errors |= {"motion_error": tracking.motion_error, "task_error": tracking.task_error}
+        errors |= {f"terms/{term}": values for term, values in tracking.terms.items()}
+        settings = {
+            "trajectory": trajectory.name,
+            "waypoints done": f"{len(Q)} of {trajectory.K}",
+            "solver": tracking.solver,
+            "stop_reason": tracking.stop_reason,
+            "wall_time [s]": round(tracking.wall_time, 3),
+            **tracking.settings,
+        }
+        return self.log_path(
+            Q, desired=desired, errors=errors, name=name or trajectory.name, settings=settings
+        )
+
+
+def _desired_paths(robot: Robot, tracking: TrackingResult, task: Any) -> dict[str, np.ndarray]:
+    """Frame -> desired positions ``(k, 3)`` along a tracked path, from the objective of every waypoint."""
+    from .costs import Position, RelativePosition
+    from .tracking import TrackingTask
+
+    builder = task
+    if not callable(task):
+        spec = task if isinstance(task, TrackingTask) else TrackingTask()
+
+        def builder(k, position, rotation, previous):
+            return spec.objective(robot, k, position, rotation, previous)
+
+    Q, trajectory = np.asarray(tracking.configurations, dtype=float), tracking.trajectory
+    points: dict[str, list[np.ndarray]] = {}
+    for k, x in enumerate(Q):
+        previous = tracking.initial if k == 0 else Q[k - 1]
+        for _, term in builder(k, trajectory.positions[k], trajectory.rotation(k), previous):
+            if isinstance(term, Position):
+                points.setdefault(term.frame, []).append(term.target)
+            elif isinstance(term, RelativePosition):
+                anchor = robot.frame_placement(x, term.frame_a).translation
+                points.setdefault(term.frame_b, []).append(anchor + term.offset)
+    return {frame: np.array(p) for frame, p in points.items() if len(p) == len(Q)}
+
+
+def _reach(segments: np.ndarray) -> float:
+    points = segments.reshape(-1, 3)
+    return float(max(np.ptp(points, axis=0).max(), 0.2)) if points.size else 1.0
+
+
+def _rgb255(rgba: tuple[float, ...] | None) -> tuple[int, int, int]:
+    if rgba is None:
+        return VISUAL_COLOR
+    return tuple(round(255 * min(max(c, 0.0), 1.0)) for c in rgba[:3])  # type: ignore[return-value]
+
+
+def _targets(robot: Robot, x: np.ndarray, problem: Problem | None, targets) -> tuple[list[str], np.ndarray]:
+    """Labels and world points ``(k, 3)`` of the targets to draw."""
+    if targets is not None:
+        if isinstance(targets, Mapping):
+            return [str(k) for k in targets], np.array([np.asarray(v, dtype=float) for v in targets.values()])
+        points = np.asarray(targets, dtype=float).reshape(-1, 3)
+        return [f"target {i + 1}" for i in range(len(points))], points
+    labels, points = [], []
+    if problem is not None:
+        from .costs import Position, RelativePosition
+
+        for (_, term), label in zip(problem.objective, problem.names):
+            if isinstance(term, Position):
+                labels.append(label)
+                points.append(term.target)
+            elif isinstance(term, RelativePosition):
+                labels.append(label)
+                points.append(robot.frame_poses(x, term.frame_a).positions[0, 0] + term.offset)
+    return labels, np.array(points, dtype=float).reshape(-1, 3)
+
+
+def _settings_markdown(name: str, result: IKResult, problem: Problem | None) -> str:
+    lines = [
+        f"# {name}",
+        "",
+        (
+            f"solver **{result.solver}**: {'success' if result.success else 'missed the tolerance'} "
+            f"({result.stop_reason}), task error {result.task_error:.3e}, cost {result.cost:.6g}, "
+            f"{result.iterations} iterations, {result.evaluations} evaluations, {result.wall_time:.3f} s"
+        ),
+        "",
+        "| term | weight | value |",
+        "|---|---|---|",
+    ]
+    weights = dict(zip(problem.names, problem.weights)) if problem is not None else {}
+    for term, value in result.terms.items():
+        weight = f"{weights[term]:g}" if term in weights else ""
+        lines.append(f"| {term} | {weight} | {value:.6e} |")
+    lines += ["", "## settings", ""]
+    lines += [f"- {k}: {v}" for k, v in result.settings.items()]
+    lines += ["", f"configuration: {np.array2string(np.asarray(result.configuration), precision=6)}"]
+    return "\n".join(lines)
+
+
+def record_solve(path: str | Path, problem: Problem, result: IKResult, *, name: str | None = None) -> Path:
+    """Write a recording of one solve (see :meth:`Recorder.log_solution`); returns the path."""
+    with Recorder(path, problem.robot) as recorder:
+        recorder.log_solution(result, problem=problem, name=name)
+    return Path(path)
+
+
+def record_task(
+    path: str | Path,
+    task: TaskFile,
+    results: Sequence[tuple[Case, IKResult | TrackingResult]],
+    *,
+    settings: Mapping[str, Any] | None = None,
+) -> Path:
+    """Write a recording of a task file's solved cases, ``(case, result)`` pairs (IK or tracking); returns
+    the path. To record while solving (flushed case by case), use :meth:`Recorder.for_task` and
+    :meth:`Recorder.log_case` instead."""
+    with Recorder.for_task(path, task, settings=settings) as recorder:
+        for case, result in results:
+            recorder.log_case(case, result)
+    return Path(path)
+
+
+# ---------------------------------------------------------------------------------------------- reading
+@dataclass(frozen=True)
+class Recording:
+    """A recording read back with rerun's own reader (:class:`rerun.chunk.RrdReader`).
+
+    Attributes:
+        path: the file.
+        complete: False when the file has no footer (its writer did not close it, e.g. it crashed).
+        entities: entity paths holding data (``"/world/robot/skeleton"``, ...).
+        timelines: every timeline of the recording (``"solution"``, ``"iteration"``, ``"waypoint"``).
+    """
+
+    path: Path
+    complete: bool
+    entities: tuple[str, ...]
+    timelines: frozenset[str]
+    _batches: dict[str, list] = field(repr=False, default_factory=dict)
+
+    def _rows(self, entity: str) -> list:
+        entity = entity if entity.startswith("/") else f"/{entity}"
+        if entity not in self._batches:
+            raise RecordingError(
+                f"{self.path} has no entity {entity!r}; entities: {', '.join(self.entities)}"
+            )
+        return self._batches[entity]
+
+    def components(self, entity: str) -> tuple[str, ...]:
+        """Component columns logged at ``entity`` (``"Scalars:scalars"``, ``"LineStrips3D:strips"``, ...)."""
+        names = {n for batch in self._rows(entity) for n in batch.schema.names}
+        return tuple(sorted(n for n in names if ":" in n and not n.startswith("rerun.")))
+
+    def values(self, entity: str, component: str, timeline: str | None = None) -> tuple[np.ndarray, list]:
+        """Times on ``timeline`` and logged values of one component, sorted by time.
+
+        With ``timeline=None`` only static values are returned (times are then all ``-1``).
+        """
+        times, values = [], []
+        for batch in self._rows(entity):
+            names = batch.schema.names
+            if component not in names:
+                continue
+            if timeline is None:
+                if any(n in self.timelines for n in names):
+                    continue
+                t = np.full(batch.num_rows, -1)
+            elif timeline in names:
+                t = np.asarray(batch.column(timeline).to_pylist())
+            else:
+                continue
+            times.append(t)
+            values += batch.column(component).to_pylist()
+        if not times:
+            return np.zeros(0, dtype=int), []
+        t = np.concatenate(times)
+        order = np.argsort(t, kind="stable")
+        return t[order], [values[i] for i in order]
+
+    def scalars(self, entity: str, timeline: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(times, values)`` of a scalar series (one scalar per row) on ``timeline``."""
+        t, v = self.values(entity, "Scalars:scalars", timeline)
+        return t, np.array([row[0] for row in v], dtype=float)
+
+    def count(self, entity: str, timeline: str, component: str | None = None) -> int:
+        """Number of rows logged at ``entity`` on ``timeline`` (e.g. the number of poses of the robot)."""
+        component = component or self.components(entity)[0]
+        return len(self.values(entity, component, timeline)[0])
+
+    def text(self, entity: str) -> str:
+        """The (last) text of a static TextDocument."""
+        _, values = self.values(entity, "TextDocument:text")
+        if not values:
+            raise RecordingError(f"{entity} holds no text document")
+        return values[-1][0]
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Read a ``.rrd`` file back: its entities, timelines and every logged value (see :class:`Recording`)."""
+    from rerun.chunk import RrdReader
+
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError(f"recording {path} does not exist")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            chunks = RrdReader(path).stream().to_chunks()
+        except Exception as err:  # rerun raises ValueError / OSError on files that are not recordings
+            raise RecordingError(f"{path} is not a readable rerun recording: {err}") from err
+    complete = not any("footer" in str(w.message) for w in caught)
+    batches: dict[str, list] = {}
+    timelines: set[str] = set()
+    for chunk in chunks:
+        if chunk.entity_path.startswith("/__"):
+            continue
+        batches.setdefault(chunk.entity_path, []).append(chunk.to_record_batch())
+        timelines.update(chunk.timeline_names)
+    return Recording(path, complete, tuple(sorted(batches)), frozenset(timelines), batches)
+
+
+# ---------------------------------------------------------------------------------------------- replay
+def replay_command_line(path: str | Path) -> list[str]:
+    """The command that opens ``path`` in the rerun viewer (the viewer binary ships with rerun-sdk)."""
+    return [sys.executable, "-m", "rerun", str(path)]
+
+
+def replay(path: str | Path, *, wait: bool = False) -> subprocess.Popen:
+    """Open a recording in the rerun viewer (a separate process); ``wait=True`` blocks until it closes."""
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError(f"recording {path} does not exist")
+    try:
+        process = subprocess.Popen(replay_command_line(path))
+    except OSError as err:
+        raise RecordingError(f"cannot start the rerun viewer: {err}") from err
+    if wait:
+        process.wait()
+    return process
+
+
+def add_replay_command(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Add ``replay FILE.rrd [--summary]`` to the CLI's subparsers; dispatch to :func:`replay_command`."""
+    parser = subparsers.add_parser("replay", help="open a recording (.rrd) in the rerun viewer")
+    parser.add_argument("recording", help="a .rrd file written by `metaik run --record`")
+    parser.add_argument(
+        "--summary", action="store_true", help="print what the recording holds instead of opening the viewer"
+    )
+    return parser
+
+
+def replay_command(args: argparse.Namespace, console: Any) -> int:
+    """``metaik replay``: open the viewer (exit 0), or print a summary with ``--summary``."""
+    recording = read_recording(args.recording)
+    if not args.summary:
+        console.print(
+            f"opening {recording.path} in the rerun viewer: {' '.join(replay_command_line(recording.path))}"
+        )
+        replay(recording.path)
+        return 0
+    console.print(
+        f"{recording.path}: {len(recording.entities)} entities, timelines "
+        f"{', '.join(sorted(recording.timelines))}{'' if recording.complete else ' (incomplete file)'}"
+    )
+    if "/summary/task_error" in recording.entities:
+        _, errors = recording.scalars("/summary/task_error", "solution")
+        _, names = recording.values("/summary/name", "TextDocument:text", "solution")
+        for name, error in zip(names, errors):
+            console.print(f"  {name[0]}: task error {error:.3e}")
+    for entity in recording.entities:
+        if entity.startswith("/tracking/") and "settings" not in entity:
+            _, values = recording.scalars(entity, "waypoint")
+            console.print(
+                f"  {entity}: {len(values)} waypoints, mean {values.mean():.3e}, max {values.max():.3e}"
+            )
+    return 0
