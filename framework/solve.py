@@ -8,6 +8,7 @@ keeps minimizing the non-task terms (motion) while driving the task error to mac
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -71,6 +72,7 @@ def solve(
     initial: np.ndarray | None = None,
     options: dict[str, Any] | None = None,
     progress: bool = False,
+    callback: Callable[[int, float, np.ndarray], bool | None] | None = None,
 ) -> IKResult:
     """Solve an IK problem.
 
@@ -86,7 +88,10 @@ def solve(
             the whole budget; the hybrid always stops at tolerance after refinement).
         initial: warm start ``(n,)`` or ``(k, n)`` (e.g. the previous solution along a trajectory).
         options: solver parameters (for the hybrid: ``global_solver``, ``global_iterations``,
-            ``refine_iterations`` and ``global_options``).
+            ``refine_iterations``, ``time_budget`` and ``global_options``).
+        progress: print a progress line now and then (metaheuristics).
+        callback: ``callback(iteration, best_f, best_x)`` after every iteration of a metaheuristic (for the
+            hybrid: of its global phase); returning True stops. Recordings use it to trace every term.
     """
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     if not np.isfinite(tolerance) or tolerance <= 0:
@@ -95,18 +100,19 @@ def solve(
         initial = problem.robot.check_population(initial, "initial configuration")
     start = time.perf_counter()
     if solver == "hybrid":
-        return _hybrid(problem, rng, population, tolerance, initial, dict(options or {}), start)
+        return _hybrid(problem, rng, population, tolerance, initial, dict(options or {}), start, callback)
     if solver == "multistart_lm":
         return _multistart(problem, rng, population, max_iterations, tolerance, initial, dict(options or {}), start)
     if solver not in available_solvers():
         known = ", ".join(["hybrid", "multistart_lm", *available_solvers()])
         raise SolverError(f"unknown solver {solver!r}; available: {known}")
 
-    callback = None
+    user_callback = callback
     if stop_at_tolerance:
 
         def callback(iteration: int, best_f: float, best_x: np.ndarray) -> bool:
-            return bool(problem.evaluate(best_x).task_error[0] <= tolerance)
+            stop = bool(user_callback(iteration, best_f, best_x)) if user_callback else False
+            return stop or bool(problem.evaluate(best_x).task_error[0] <= tolerance)
 
     run = minimize(
         problem.cost,
@@ -121,12 +127,14 @@ def solve(
         callback=callback,
         progress=progress,
     )
-    stop = "tolerance" if run.stop_reason == "callback" else run.stop_reason
+    stop = run.stop_reason
+    if stop == "callback" and stop_at_tolerance and problem.evaluate(run.x).task_error[0] <= tolerance:
+        stop = "tolerance"
     return _result(problem, run.x, stop, run.iterations, run.evaluations, start, run.history, solver,
                    {**run.settings, "population": population, "max_iterations": max_iterations}, tolerance)
 
 
-def _hybrid(problem, rng, population, tolerance, initial, options, start) -> IKResult:
+def _hybrid(problem, rng, population, tolerance, initial, options, start, callback=None) -> IKResult:
     unknown = set(options) - set(HYBRID_DEFAULTS) - {"global_options"}
     if unknown:
         raise SolverError(f"unknown hybrid option(s) {sorted(unknown)}; known: {sorted(HYBRID_DEFAULTS)}")
@@ -143,6 +151,7 @@ def _hybrid(problem, rng, population, tolerance, initial, options, start) -> IKR
             initial=initial,
             bounds=problem.repair_mode,
             options=settings.get("global_options"),
+            callback=callback,
         )
         x0, history, iterations, evaluations = run.x, list(run.history), run.iterations, run.evaluations
     else:

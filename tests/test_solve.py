@@ -129,3 +129,17 @@ def test_multistart_lm_solves_full_poses_and_is_deterministic(rng):
 def test_multistart_lm_refuses_non_task_terms(problem):
     with pytest.raises(fw.SolverError, match="hybrid"):
         solve(problem, "multistart_lm")
+
+
+def test_callback_sees_every_iteration_and_can_stop(problem):
+    seen = []
+
+    def callback(iteration, best_f, best_x):
+        seen.append((iteration, best_f))
+        return iteration >= 9
+
+    result = solve(problem, "de", seed=0, max_iterations=100, callback=callback)
+    assert [i for i, _ in seen] == list(range(len(seen))) or [i for i, _ in seen] == list(range(1, len(seen) + 1))
+    assert result.iterations == len(seen) <= 11
+    assert result.stop_reason == "callback"
+    np.testing.assert_allclose([f for _, f in seen], result.history[: len(seen)])
