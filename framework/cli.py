@@ -38,6 +38,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--iterations", type=int, help="override max_iterations")
     run.add_argument("--population", type=int, help="override the population size")
     run.add_argument("--case", action="append", help="only these cases (by name); repeatable")
+    run.add_argument("--points", type=int, help="tracking tasks: number of waypoints (re-samples the path)")
+    run.add_argument("--no-progress", action="store_true", help="tracking tasks: no progress bar")
+    run.add_argument("--output", type=Path, help="tracking tasks: write the joint path and errors per waypoint (.csv)")
 
     sub.add_parser("tasks", help="list the shipped task files")
     return parser
@@ -122,12 +125,14 @@ def _run(args, console: Console) -> int:
     from .solve import solve
     from .taskfile import load_task
 
-    task = load_task(resolve_task(args.task))
+    task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
     settings = dict(task.solver)
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}
     settings.update({k: v for k, v in overrides.items() if v is not None})
     solver = settings.get("name", "hybrid")
+    if task.is_tracking:
+        return _run_tracking(args, console, task, settings, solver)
     cases = [c for c in task.cases if not args.case or c.name in args.case]
     if not cases:
         raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
@@ -170,6 +175,102 @@ def _run(args, console: Console) -> int:
     console.print(f"configuration of {cases[-1].name}: " + "; ".join(
         f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
     return EXIT_OK if all_ok else EXIT_MISSED
+
+
+def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> int:
+    """``metaik run`` of a tracking task: track every case's trajectory, then one summary table."""
+    from .tracking import track
+
+    cases = [c for c in task.cases if not args.case or c.name in args.case]
+    if not cases:
+        raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
+    iterations = settings.get("max_iterations", 300)
+    console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
+                  f"({iterations} iterations per point): {task.description}")
+    tolerance = settings.get("tolerance", 1e-4)
+    results, interrupted = [], False
+    for case in cases:
+        result = track(
+            task.robot, case.trajectory, case.builder,
+            solver=solver,
+            seed=settings.get("seed", 0),
+            iterations_per_point=iterations,
+            population=settings.get("population", 30),
+            initial=case.initial,
+            warm_start=settings.get("warm_start", True),
+            predict=settings.get("predict"),
+            tolerance=tolerance,
+            stop_at_tolerance=settings.get("stop_at_tolerance", False),
+            bounds=settings.get("bounds", "resample"),
+            options=settings.get("options"),
+            progress=False if args.no_progress else None,
+        )
+        results.append((case, result))
+        if result.stop_reason == "interrupted":
+            interrupted = True
+            break
+    console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
+    if args.output is not None:
+        write_tracking_csv(args.output, task.robot, results)
+        console.print(f"wrote {args.output}")
+    if interrupted:
+        Console(stderr=True).print("interrupted: the table shows the waypoints done")
+        return EXIT_INTERRUPTED
+    return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
+
+
+def tracking_table(task, results: list, solver: str, seed: int, tolerance: float) -> Table:
+    """Mean/max position, orientation and motion error, smoothness and time of each tracked case."""
+    table = Table(title=f"{task.name}: tracking with {solver}, seed {seed} (errors per waypoint)")
+    table.add_column("")
+    for case, _ in results:
+        table.add_column(case.name, justify="right")
+    rows = {label: [] for label in (
+        "waypoints", "position error, mean [m]", "position error, max [m]", "orientation error, mean",
+        "orientation error, max", "motion error, mean", "motion error, max", "max joint step", "mean joint step",
+        "worst step at waypoint", f"within tolerance {tolerance:g}", "evaluations", "time (s)")}
+    for case, result in results:
+        smooth = result.smoothness(task.robot) if len(result) else None
+        oriented = case.trajectory.has_orientation
+        cells = [
+            f"{len(result)}/{case.trajectory.K}",
+            f"{_mean(result.position_error):.2e}", f"{_max(result.position_error):.2e}",
+            f"{_mean(result.orientation_error):.2e}" if oriented else "-",
+            f"{_max(result.orientation_error):.2e}" if oriented else "-",
+            f"{_mean(result.motion_error):.2e}", f"{_max(result.motion_error):.2e}",
+            f"{smooth.max_step['all']:.4f}" if smooth else "-",
+            f"{smooth.mean_step['all']:.4f}" if smooth else "-",
+            str(smooth.worst_point["all"]) if smooth else "-",
+            ("" if result.all_success else "[red]") + f"{int(result.success.sum())}/{case.trajectory.K}",
+            str(int(result.evaluations.sum())),
+            f"{result.wall_time:.2f}",
+        ]
+        for label, cell in zip(rows, cells):
+            rows[label].append(cell)
+    for label, cells in rows.items():
+        table.add_row(label, *cells)
+    return table
+
+
+def write_tracking_csv(path: Path, robot, results: list) -> None:
+    """One row per waypoint: case, k, joint coordinates, position / orientation / motion error."""
+    import csv
+
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["case", "k", *robot.coordinate_names, "position_error", "orientation_error", "motion_error"])
+        for case, result in results:
+            for k, q in enumerate(result.configurations):
+                writer.writerow([case.name, k, *(f"{v:.17g}" for v in q), f"{result.position_error[k]:.6e}",
+                                 f"{result.orientation_error[k]:.6e}", f"{result.motion_error[k]:.6e}"])
+
+
+def _mean(a: np.ndarray) -> float:
+    return float(a.mean()) if a.size else float("nan")
+
+
+def _max(a: np.ndarray) -> float:
+    return float(a.max()) if a.size else float("nan")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -26,6 +26,33 @@ A task file reads top to bottom like the experiment it describes::
 
 Expressions are numbers, vectors (lists), the names of a case's variables, ``pi``, ``+ - * /``,
 parentheses and the rotation matrices ``Rx(a)``, ``Ry(a)``, ``Rz(a)``; nothing else is evaluated. Angles are in radians, lengths in metres.
+
+**Trajectory tracking.** A ``[trajectory]`` table turns the task into tracking (``metaik run`` then solves one IK
+per waypoint, each warm-started from the previous solution, see :func:`framework.tracking.track`). The terms
+are rebuilt at every waypoint with three more variables: ``t`` (waypoint position [m]), ``R`` (its rotation, if
+the path has an orientation) and ``k`` (its index); motion terms without ``previous`` measure the motion to the
+previous waypoint's solution, and ``[previous]`` is the configuration before the first waypoint::
+
+    [trajectory]
+    type = "circle"                       # circle | lemniscate | rose | sinusoid | line | paper000 | file | waypoints
+    centre = [0.5, 0.25, 0.45]
+    radius = 0.05
+    points = 200
+    plane = "yz"                          # the circle's plane through the centre (default "yz")
+    orientation = "Ry(pi/2)"              # optional: the same rotation at every waypoint
+
+    [[terms]]
+    type = "position"
+    frame = "arm1_ee"
+    target = "t"                          # the waypoint
+    [[terms]]
+    type = "position"
+    frame = "arm2_ee"
+    target = "t + t_r"                    # coordinated arm (paper 000 eq. 8); t_r from the case
+
+A case may carry its own ``trajectory`` table (``[cases.trajectory]``), which replaces the top-level one.
+``[solver]`` also takes ``warm_start`` (default true) and ``predict`` (Jacobian predictor; default: hybrid only);
+``max_iterations`` is the budget of each waypoint's solve.
 """
 
 from __future__ import annotations
@@ -33,7 +60,7 @@ from __future__ import annotations
 import ast
 import operator
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,6 +72,7 @@ from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
 from .robot import Robot
+from .trajectory import Trajectory, circle, lemniscate, line, paper000, rose, sinusoid
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -66,7 +94,21 @@ def _rotation(axis: int):
 
 
 _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
-SOLVER_KEYS = {"name", "population", "max_iterations", "tolerance", "seed", "bounds", "options", "stop_at_tolerance"}
+SOLVER_KEYS = {"name", "population", "max_iterations", "tolerance", "seed", "bounds", "options", "stop_at_tolerance",
+               "warm_start", "predict"}
+#: ``[trajectory]`` types -> (required keys, optional keys); every type also takes ``name`` and ``orientation``.
+TRAJECTORY_KEYS: dict[str, tuple[set[str], set[str]]] = {
+    "circle": ({"centre", "radius"}, {"points", "plane", "start_angle", "turns"}),
+    "lemniscate": ({"centre", "a"}, {"points", "plane"}),
+    "rose": ({"centre", "radius", "amplitude"}, {"points", "petals", "plane"}),
+    "sinusoid": ({"start", "stop", "amplitude", "wavenumber"}, {"points", "axis", "phase", "saturation"}),
+    "line": ({"start", "stop"}, {"points"}),
+    "paper000": ({"path"}, {"points"}),
+    "file": ({"path"}, set()),
+    "waypoints": ({"positions"}, set()),
+}
+#: Variables a tracking task defines at every waypoint.
+WAYPOINT_VARIABLES = ("t", "R", "k")
 TERM_KEYS = {
     "position": {"frame", "target"},
     "orientation": {"frame", "target"},
@@ -78,6 +120,8 @@ TERM_KEYS = {
 
 def evaluate(expression: Any, variables: Mapping[str, Any], where: str) -> np.ndarray | float:
     """Value of a number, list, or expression string over ``variables`` (see the module docstring)."""
+    if isinstance(expression, np.ndarray):
+        return expression.astype(float)
     if isinstance(expression, (list, tuple)):
         return np.array([evaluate(e, variables, where) for e in expression], dtype=float)
     if isinstance(expression, (int, float)) and not isinstance(expression, bool):
@@ -118,11 +162,23 @@ def evaluate(expression: Any, variables: Mapping[str, Any], where: str) -> np.nd
 
 @dataclass(frozen=True)
 class Case:
-    """One IK solve of a task file: its name, problem and variables."""
+    """One IK solve of a task file: its name, problem and variables.
+
+    For a tracking task also: ``trajectory`` (the waypoints), ``builder`` (the terms of waypoint ``k``, see
+    :data:`framework.tracking.TaskBuilder`) and ``initial`` (``(n,)`` the configuration before the first
+    waypoint); ``problem`` is then the problem of the first waypoint.
+    """
 
     name: str
     problem: Problem
     variables: dict[str, Any] = field(default_factory=dict)
+    trajectory: Trajectory | None = None
+    builder: Callable[..., Objective] | None = field(default=None, repr=False)
+    initial: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def is_tracking(self) -> bool:
+        return self.trajectory is not None
 
 
 @dataclass(frozen=True)
@@ -137,9 +193,18 @@ class TaskFile:
     cases: tuple[Case, ...]
     raw: dict[str, Any] = field(repr=False, default_factory=dict)
 
+    @property
+    def is_tracking(self) -> bool:
+        """True for a trajectory-tracking task (a ``[trajectory]`` table, top level or per case)."""
+        return any(c.is_tracking for c in self.cases)
 
-def load_task(path: str | Path) -> TaskFile:
-    """Parse and validate a task file; every error names the file and the entry at fault."""
+
+def load_task(path: str | Path, *, points: int | None = None) -> TaskFile:
+    """Parse and validate a task file; every error names the file and the entry at fault.
+
+    ``points`` overrides the number of waypoints of a tracking task (parametric paths are re-sampled, paths
+    from files or lists keep ``points`` evenly spaced waypoints).
+    """
     path = Path(path)
     if not path.is_file():
         raise TaskError(f"task file {path} does not exist")
@@ -148,14 +213,19 @@ def load_task(path: str | Path) -> TaskFile:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise TaskError(f"{path}: not valid TOML: {err}") from err
     try:
-        return _parse(path, raw)
+        return _parse(path, raw, points=points)
     except MetaikError as err:
         if str(path) in str(err):
             raise
         raise type(err)(f"{path}: {err}") from err
 
 
-def _parse(path: Path, raw: dict[str, Any]) -> TaskFile:
+def task_from_dict(raw: dict[str, Any], path: str | Path, *, points: int | None = None) -> TaskFile:
+    """A task from an already-read TOML dictionary; ``path`` locates relative robot and trajectory files."""
+    return _parse(Path(path), raw, points=points)
+
+
+def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> TaskFile:
     task = _table(raw, "task", path)
     if "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")
@@ -171,12 +241,24 @@ def _parse(path: Path, raw: dict[str, Any]) -> TaskFile:
         raise TaskError("a task needs at least one [[terms]] entry")
     cases_raw = raw.get("cases") or [{"name": task.get("name", path.stem)}]
     cases = []
+    bounds = solver.get("bounds", "resample")
     for i, case in enumerate(cases_raw):
-        variables = {k: v for k, v in case.items() if k != "name"}
+        variables = {k: v for k, v in case.items() if k not in ("name", "trajectory")}
         name = str(case.get("name", f"case {i + 1}"))
         previous = _previous(robot, raw.get("previous", {}), variables, path)
-        objective = _objective(robot, terms, variables, previous)
-        cases.append(Case(name, Problem(robot, objective, bounds=solver.get("bounds", "resample")), variables))
+        spec = case.get("trajectory", raw.get("trajectory"))
+        if spec is None:
+            objective = _objective(robot, terms, variables, previous)
+            cases.append(Case(name, Problem(robot, objective, bounds=bounds), variables))
+            continue
+        reserved = sorted(set(variables) & set(WAYPOINT_VARIABLES))
+        if reserved:
+            raise TaskError(f"case {name!r}: {reserved} are waypoint variables of a tracking task; rename them")
+        trajectory = _trajectory(spec, variables, path, points, f"case {name!r}: trajectory")
+        _check_uses_waypoint(terms)
+        builder = _TermsAtWaypoint(robot, terms, variables)
+        first = builder(0, trajectory.positions[0], trajectory.rotation(0), previous)
+        cases.append(Case(name, Problem(robot, first, bounds=bounds), variables, trajectory, builder, previous))
     return TaskFile(path, task.get("name", path.stem), task.get("description", ""), robot, solver, tuple(cases), raw)
 
 
@@ -238,3 +320,99 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
         weighted = weight * term
         objective = weighted if objective is None else objective + weighted
     return objective
+
+
+# ---------------------------------------------------------------------------------------------- tracking
+class _TermsAtWaypoint:
+    """The task file's terms at one waypoint: a :data:`framework.tracking.TaskBuilder`."""
+
+    def __init__(self, robot: Robot, terms: list, variables: Mapping[str, Any]):
+        self.robot, self.terms, self.variables = robot, terms, dict(variables)
+        self.__name__ = "task file terms"
+
+    def __call__(self, k: int, position: np.ndarray, rotation: np.ndarray | None, previous: np.ndarray) -> Objective:
+        point = {**self.variables, "t": position, "k": float(k)}
+        if rotation is not None:
+            point["R"] = rotation
+        return _objective(self.robot, self.terms, point, previous)
+
+
+def _check_uses_waypoint(terms: list) -> None:
+    """A tracking task whose terms never read ``t`` or ``R`` would solve the same IK at every waypoint."""
+    for spec in terms:
+        for value in spec.values():
+            if isinstance(value, str) and _names(value) & {"t", "R"}:
+                return
+    raise TaskError("a [trajectory] task needs terms that use the waypoint: target = \"t\" (position) or \"R\"")
+
+
+def _names(expression: str) -> set[str]:
+    try:
+        tree = ast.parse(expression, mode="eval")
+    except SyntaxError:
+        return set()
+    return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
+
+
+def _trajectory(spec: Any, variables: Mapping, path: Path, points: int | None, where: str) -> Trajectory:
+    """A :class:`Trajectory` from a ``[trajectory]`` table (see the module docstring)."""
+    if not isinstance(spec, dict):
+        raise TaskError(f"{where} must be a table")
+    kind = spec.get("type")
+    if kind not in TRAJECTORY_KEYS:
+        raise TaskError(f"{where}: unknown type {kind!r}; known: {sorted(TRAJECTORY_KEYS)}")
+    required, optional = TRAJECTORY_KEYS[kind]
+    missing = required - set(spec)
+    if missing:
+        raise TaskError(f"{where} ({kind}) needs {sorted(missing)}")
+    unknown = set(spec) - required - optional - {"type", "name", "orientation"}
+    if unknown:
+        raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}; known: {sorted(required | optional)}")
+
+    def value(key: str) -> Any:
+        return evaluate(spec[key], variables, f"{where} {key}")
+
+    def integer(key: str, default: int) -> int:
+        number = value(key) if key in spec else default
+        if float(number) != int(number):
+            raise TaskError(f"{where} {key} must be an integer; got {number!r}")
+        return int(number)
+
+    n = points if points is not None else integer("points", 200)
+    name = str(spec.get("name", kind))
+    plane = spec.get("plane", "yz")
+    if kind == "circle":
+        trajectory = circle(value("centre"), value("radius"), n, plane=plane,
+                            start_angle=value("start_angle") if "start_angle" in spec else 0.0,
+                            turns=value("turns") if "turns" in spec else 1.0, name=name)
+    elif kind == "lemniscate":
+        trajectory = lemniscate(value("centre"), value("a"), n, plane=plane, name=name)
+    elif kind == "rose":
+        trajectory = rose(value("centre"), value("radius"), value("amplitude"), n, petals=integer("petals", 3),
+                          plane=plane, name=name)
+    elif kind == "sinusoid":
+        trajectory = sinusoid(value("start"), value("stop"), value("amplitude"), value("wavenumber"), n,
+                              axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0),
+                              phase=value("phase") if "phase" in spec else 0.0,
+                              saturation=value("saturation") if "saturation" in spec else None, name=name)
+    elif kind == "line":
+        trajectory = line(value("start"), value("stop"), n, name=name)
+    elif kind == "paper000":
+        trajectory = paper000(str(spec["path"]), n).renamed(name if "name" in spec else str(spec["path"]))
+    else:
+        if kind == "file":
+            local = path.parent / str(spec["path"])
+            trajectory = Trajectory.from_file(local if local.is_file() else Path(str(spec["path"])), name)
+        else:
+            trajectory = Trajectory.from_array(value("positions"), name)
+        if points is not None:
+            trajectory = trajectory[np.unique(np.linspace(0, trajectory.K - 1, points).round().astype(int))]
+    if "orientation" in spec:
+        trajectory = trajectory.with_orientation(_rotation_value(value("orientation"), f"{where} orientation"))
+    return trajectory
+
+
+def _rotation_value(value: Any, where: str) -> np.ndarray:
+    from .costs.orientation import rotation_from
+
+    return rotation_from(value, where)

@@ -1,0 +1,217 @@
+"""Trajectory tracking: accuracy along a path, warm start, coordination, smoothness, Ctrl-C, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import framework as fw
+from framework import trajectory as tr
+from framework.costs import Motion, Position
+from framework.problem import Problem
+from framework.tracking import TrackingTask, joint_steps, predictor, track
+
+Q_PREV = np.r_[
+    0,
+    0,
+    np.pi / 2,
+    -np.pi / 2,
+    np.pi / 2,
+    -np.pi / 4,
+    np.pi / 4,
+    0,
+    np.pi / 2,
+    np.pi / 2,
+    -np.pi / 4,
+    np.pi / 4,
+    0,
+]
+PAPER000 = {
+    "frame": "arm1_ee",
+    "follower": "arm2_ee",
+    "offset": (0.0, -0.3, 0.0),
+    "position_weight": 1.2,
+    "motion": {"base": 0.1, "arm1": 0.4, "arm2": 0.4},
+}
+
+
+@pytest.fixture(scope="module")
+def mobile_dual() -> fw.Robot:
+    return fw.load_robot("youbot_dual_mobile")
+
+
+@pytest.fixture(scope="module")
+def arm() -> fw.Robot:
+    return fw.load_robot("youbot_arm")
+
+
+def test_tracked_circle_matches_the_path(arm):
+    circle = tr.circle((0.3, 0.0, 0.3), 0.03, 25)
+    result = track(arm, circle, TrackingTask(motion=0.01), solver="hybrid", progress=False)
+    assert result.completed and result.stop_reason == "completed" and len(result) == 25
+    achieved = result.frame_positions(arm, "ee")[:, 0]
+    np.testing.assert_allclose(
+        achieved, circle.positions, atol=1e-9
+    )  # FK of Q, independent of the solver's report
+    np.testing.assert_allclose(
+        result.position_error, np.linalg.norm(achieved - circle.positions, axis=1), atol=1e-12
+    )
+    assert result.all_success and result.orientation_error.max() == 0.0
+    smooth = result.smoothness(arm)
+    assert smooth.max_step["all"] < 0.1  # consecutive waypoints 7.8 mm apart: small joint steps, no jump
+
+
+def test_paper000_coordinated_tracking_keeps_the_relative_offset(mobile_dual):
+    path = tr.paper000("circular", 200)[:15]
+    result = track(
+        mobile_dual, path, TrackingTask(**PAPER000), solver="hybrid", initial=Q_PREV, progress=False
+    )
+    P = result.frame_positions(mobile_dual, ("arm1_ee", "arm2_ee"))
+    np.testing.assert_allclose(P[:, 0], path.positions, atol=1e-9)
+    np.testing.assert_allclose(P[:, 1] - P[:, 0], np.tile([0.0, -0.3, 0.0], (15, 1)), atol=1e-9)
+    assert set(result.terms) == {"position", "follower", "motion[base]", "motion[arm1]", "motion[arm2]"}
+    np.testing.assert_allclose(result.position_error, result.terms["position"] + result.terms["follower"])
+    np.testing.assert_allclose(
+        result.motion_error, sum(result.terms[f"motion[{g}]"] for g in ("base", "arm1", "arm2"))
+    )
+    # each solution is the q_prev of the next: the motion term measures the step from the previous point
+    step = np.linalg.norm(result.configurations[5, 3:8] - result.configurations[4, 3:8])
+    assert result.terms["motion[arm1]"][5] == pytest.approx(step, rel=1e-9)
+
+
+def test_relative_coordination_holds_the_follower_at_the_offset(mobile_dual):
+    path = tr.paper000("rose", 200)[:8]
+    task = TrackingTask(**{**PAPER000, "coordination": "relative"})
+    result = track(mobile_dual, path, task, solver="hybrid", initial=Q_PREV, progress=False)
+    P = result.frame_positions(mobile_dual, ("arm1_ee", "arm2_ee"))
+    np.testing.assert_allclose(P[:, 1] - P[:, 0], np.tile([0.0, -0.3, 0.0], (8, 1)), atol=1e-9)
+
+
+def test_warm_start_cuts_evaluations(arm):
+    circle = tr.circle((0.3, 0.0, 0.3), 0.03, 8)
+    runs = {
+        warm: track(
+            arm,
+            circle,
+            TrackingTask(motion=0.01),
+            solver="cmaes_fast",
+            iterations_per_point=300,
+            tolerance=1e-6,
+            stop_at_tolerance=True,
+            warm_start=warm,
+            seed=3,
+            progress=False,
+        )
+        for warm in (True, False)
+    }
+    assert runs[True].all_success and runs[False].all_success
+    # after the first point (solved from the same start), warm-started solves need fewer evaluations: CMA-ES
+    # still adapts its covariance from scratch (~25 % saved); the hybrid's predictor + refinement skips its
+    # global phase (> 95 % saved)
+    warm, cold = (runs[w].evaluations[1:].sum() for w in (True, False))
+    assert warm < 0.75 * cold
+    hybrid = {
+        w: track(arm, circle, TrackingTask(motion=0.01), solver="hybrid", warm_start=w, progress=False)
+        for w in (True, False)
+    }
+    assert hybrid[True].position_error.max() < 1e-9 and hybrid[False].position_error.max() < 1e-9
+    assert hybrid[True].evaluations[1:].sum() < 0.05 * hybrid[False].evaluations[1:].sum()
+
+
+def test_orientation_tracking_with_paper002_weights():
+    puma = fw.load_robot("puma560")
+    path = tr.paper002("puma560", "circle", 6)
+    task = TrackingTask(position_weight=0.7143, orientation_weight=0.1786, motion=0.1071, motion_norm="l1")
+    result = track(puma, path, task, solver="hybrid", seed=1, progress=False)
+    assert result.position_error.max() < 1e-9 and result.orientation_error.max() < 1e-9
+    assert "orientation" in result.terms and "motion[all]" in result.terms
+
+
+def test_builder_callable_and_callback_stop(arm):
+    calls = []
+
+    def builder(k, position, rotation, previous):
+        calls.append(k)
+        return Position("ee", position) + 0.01 * Motion("all", previous)
+
+    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
+    result = track(arm, path, builder, solver="hybrid", progress=False, callback=lambda k, r: k == 3)
+    assert len(result) == 4 and result.stop_reason == "callback" and not result.completed
+    assert calls == [0, 1, 2, 3]
+
+
+def test_ctrl_c_keeps_the_points_done(arm):
+    def interrupt(k, result):
+        if k == 2:
+            raise KeyboardInterrupt
+
+    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
+    result = track(arm, path, solver="hybrid", progress=False, callback=interrupt)
+    assert result.stop_reason == "interrupted" and len(result) == 3
+    assert result.configurations.shape == (3, arm.n) and result.position_error.shape == (3,)
+
+
+def test_runs_are_reproducible(arm):
+    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 4)
+    a, b = (track(arm, path, solver="de", iterations_per_point=20, seed=7, progress=False) for _ in range(2))
+    np.testing.assert_array_equal(a.configurations, b.configurations)
+
+
+def test_predictor_lands_on_the_task(arm):
+    x = np.array([0.1, 0.4, -0.8, 0.5, 0.0])
+    p = arm.frame_placement(x, "ee").translation
+    problem = Problem(arm, Position("ee", p + [0.0, 0.005, -0.004]) + 0.1 * Motion("all", x))
+    y = predictor(problem, x)
+    assert (
+        np.linalg.norm(arm.frame_placement(y, "ee").translation - problem.objective.terms[0][1].target)
+        < 1e-12
+    )
+    assert np.abs(y - x).max() < 0.1
+
+
+def test_joint_steps_per_group(mobile_dual):
+    Q = np.zeros((4, 13))
+    Q[:, 0] = [0.0, 0.01, 0.03, 0.03]  # base x [m]
+    Q[:, 3] = [0.0, 0.0, 0.5, 0.5]  # arm1 jumps 0.5 rad at point 2
+    smooth = joint_steps(mobile_dual, Q, initial=Q[0] - 0.2)
+    assert smooth.max_step["arm1"] == pytest.approx(0.5) and smooth.worst_point["arm1"] == 2
+    np.testing.assert_allclose(smooth.steps["base"], [0.01, 0.02, 0.0])
+    assert smooth.mean_step["base"] == pytest.approx(0.01)
+    assert smooth.max_step["arm2"] == 0.0 and smooth.approach["all"] == pytest.approx(0.2)
+
+
+WHEEL = """<robot name="wheel"><link name="base"/><link name="rim"/><link name="tip"/>
+<joint name="spin" type="continuous"><parent link="base"/><child link="rim"/><axis xyz="0 0 1"/></joint>
+<joint name="fix" type="fixed"><parent link="rim"/><child link="tip"/><origin xyz="0.1 0 0"/></joint></robot>"""
+
+
+def test_joint_steps_wrap_continuous_angles():
+    wheel = fw.robot_from_urdf(WHEEL, end_effectors=["tip"])
+    smooth = joint_steps(wheel, np.array([[3.1], [-3.1], [-3.0]]))
+    np.testing.assert_allclose(smooth.steps["all"], [2 * np.pi - 6.2, 0.1], atol=1e-12)
+
+
+def test_bad_input(arm, mobile_dual):
+    path = tr.line((0.3, 0.0, 0.3), (0.3, 0.01, 0.3), 3)
+    with pytest.raises(fw.ConfigurationError):
+        track(arm, path, initial=np.zeros(4), progress=False)
+    with pytest.raises(fw.ConfigurationError):
+        track(arm, path, initial=np.full(5, np.nan), progress=False)
+    with pytest.raises(fw.TaskError, match="follower"):
+        TrackingTask(follower="arm2_ee")
+    with pytest.raises(fw.TaskError, match="t_r"):
+        TrackingTask(follower="arm2_ee", offset=(0.0, np.nan, 0.0))
+    with pytest.raises(fw.TaskError, match="weight"):
+        TrackingTask(position_weight=-1.0)
+    with pytest.raises(fw.TaskError, match="coordination"):
+        TrackingTask(follower="arm2_ee", offset=(0, 0, 0), coordination="mirror")
+    with pytest.raises(fw.UnknownFrameError):
+        track(arm, path, TrackingTask(frame="hand"), progress=False)
+    with pytest.raises(fw.UnknownJointError):
+        track(arm, path, TrackingTask(motion={"legs": 1.0}), progress=False)
+    with pytest.raises(fw.TaskError, match="Trajectory"):
+        track(arm, np.zeros((3, 3)), progress=False)
+    with pytest.raises(fw.TaskError, match="iterations_per_point"):
+        track(arm, path, iterations_per_point=0, progress=False)
+    with pytest.raises(fw.SolverError):
+        track(arm, path, solver="gradient_descent", progress=False)

@@ -1,0 +1,153 @@
+"""Tracking task files (``[trajectory]``) and ``metaik run`` on them: the papers' paths, exit codes, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import framework as fw
+from framework import trajectory as tr
+from framework.cli import EXIT_INPUT, EXIT_MISSED, EXIT_OK, main
+from framework.resources import data_dir
+from framework.taskfile import load_task
+
+TASKS = data_dir("tasks")
+
+TRACK = """
+[task]
+name = "wave"
+robot = "youbot_arm"
+[solver]
+name = "hybrid"
+[previous]
+arm = [0, 0.3, -0.6, 0.4, 0]
+[trajectory]
+type = "circle"
+centre = [0.3, 0.0, 0.3]
+radius = "r"
+points = 12
+[[terms]]
+type = "position"
+frame = "ee"
+target = "t"
+[[terms]]
+type = "motion"
+group = "all"
+weight = 0.01
+[[cases]]
+name = "small"
+r = 0.02
+[[cases]]
+name = "file"
+r = 0.02
+[cases.trajectory]
+type = "file"
+path = "path.csv"
+"""
+
+
+@pytest.mark.parametrize("path", tr.PAPER000_PATHS)
+def test_paper000_task_files_are_the_papers_paths(path):
+    task = load_task(TASKS / f"paper000_{path}.toml")
+    case = task.cases[0]
+    assert (
+        task.is_tracking and task.robot.name == "youbot_dual_mobile" and task.solver["max_iterations"] == 300
+    )
+    np.testing.assert_allclose(case.trajectory.positions, tr.paper000(path).positions, atol=1e-15)
+    np.testing.assert_allclose(case.initial[:3], [0, 0, np.pi / 2])
+    objective = case.builder(5, case.trajectory.positions[5], None, case.initial)
+    assert [t.name for _, t in objective] == ["e_t1", "e_t2", "e_q0", "e_q1", "e_q2"]
+    np.testing.assert_allclose([w for w, _ in objective], [1.2, 1.2, 0.1, 0.4, 0.4])
+    t_r = np.array([0.0, -0.3, 0.0])
+    np.testing.assert_allclose(objective.terms[1][1].target, case.trajectory.positions[5] + t_r)
+
+
+@pytest.mark.parametrize("robot", ["youbot", "puma", "baxter", "fanuc"])
+@pytest.mark.parametrize("path", ["circle", "lemniscate"])
+def test_paper002_task_files(robot, path):
+    task = load_task(TASKS / f"paper002_{robot}_{path}.toml")
+    case = task.cases[0]
+    expected = tr.paper002(task.robot.name, path, case.trajectory.K)
+    assert (32 if path == "circle" else 73) == case.trajectory.K
+    np.testing.assert_allclose(case.trajectory.positions, expected.positions, atol=1e-15)
+    np.testing.assert_allclose(case.trajectory.rotations, expected.rotations, atol=1e-15)
+    objective = case.builder(0, expected.positions[0], expected.rotations[0], case.initial)
+    np.testing.assert_allclose([w for w, _ in objective], [0.7143, 0.1786, 0.1071])
+    assert objective.terms[2][1].norm == "l1"
+
+
+def test_paper001_task_files():
+    for name, robot in (
+        ("paper001_youbot_circle", "youbot_dual"),
+        ("paper001_baxter_sinusoid", "baxter_dual"),
+    ):
+        task = load_task(TASKS / f"{name}.toml")
+        assert task.is_tracking and task.robot.name == robot and task.solver["name"] == "de"
+
+
+def test_run_tracks_and_prints_the_summary(capsys):
+    code = main(
+        [
+            "run",
+            str(TASKS / "paper000_circular.toml"),
+            "--solver",
+            "hybrid",
+            "--points",
+            "15",
+            "--no-progress",
+        ]
+    )
+    out = capsys.readouterr().out
+    assert code == EXIT_OK
+    assert "15/15" in out and "position error, mean" in out and "max joint step" in out
+
+
+def test_user_task_file_with_cases_and_a_csv_path(tmp_path, capsys):
+    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    file = tmp_path / "wave.toml"
+    file.write_text(TRACK)
+    task = load_task(file)
+    assert [c.trajectory.K for c in task.cases] == [12, 6]
+    assert task.cases[0].trajectory.positions[0] == pytest.approx(
+        [0.3, 0.02, 0.3]
+    )  # plane yz, radius from the case
+    output = tmp_path / "joints.csv"
+    assert main(["run", str(file), "--no-progress", "--output", str(output)]) == EXIT_OK
+    rows = output.read_text().splitlines()
+    assert len(rows) == 1 + 12 + 6 and rows[0].startswith("case,k,joint1")
+    # a budget too small for a metaheuristic misses the tolerance: exit code 1
+    assert (
+        main(["run", str(file), "--solver", "de", "--iterations", "2", "--case", "file", "--no-progress"])
+        == EXIT_MISSED
+    )
+    assert load_task(file, points=4).cases[1].trajectory.K == 4
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        (('type = "circle"', 'type = "spiral"'), "unknown type 'spiral'"),
+        (('radius = "r"', 'radius = "r"\ncolour = 1'), "unknown keys"),
+        (('radius = "r"', 'radius = "-r"'), "radius"),
+        (('target = "t"', "target = [0.3, 0, 0.3]"), "use the waypoint"),
+        (("points = 12", "points = 1"), "points"),
+        (("r = 0.02\n[[cases]]", "r = 0.02\nt = 1\n[[cases]]"), "waypoint variables"),
+        (('path = "path.csv"', 'path = "missing.csv"'), "does not exist"),
+    ],
+)
+def test_bad_trajectory_tables_exit_2(tmp_path, capsys, change, match):
+    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    file = tmp_path / "bad.toml"
+    file.write_text(TRACK.replace(*change, 1))
+    with pytest.raises(fw.TaskError, match=match):
+        load_task(file)
+    assert main(["run", str(file)]) == EXIT_INPUT
+    assert match.split("'")[0].split(" ")[0] in capsys.readouterr().err
+
+
+def test_nan_in_a_csv_path_exits_2(tmp_path, capsys):
+    (tmp_path / "path.csv").write_text("x,y,z\n0.3,0,0.3\n0.3,nan,0.3\n")
+    file = tmp_path / "t.toml"
+    file.write_text(TRACK)
+    assert main(["run", str(file)]) == EXIT_INPUT
+    assert "NaN" in capsys.readouterr().err
