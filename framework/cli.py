@@ -1,4 +1,4 @@
-"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``run TASK`` (and more as they land).
+"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``tasks``, ``run TASK``, ``bench TASK...``, ``replay FILE``.
 
 Exit codes: 0 success; 1 the run finished but some case missed its tolerance; 2 bad input (missing file,
 bad TOML, unknown robot/solver/frame, invalid weights: one clear line, no traceback); 130 interrupted.
@@ -9,15 +9,18 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from .errors import MetaikError, TaskError
+from .bench import add_bench_command, bench_command
+from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
+from .recording import Recorder, add_replay_command, replay_command
+from .taskfile import resolve_task
 
-EXIT_OK, EXIT_MISSED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -41,8 +44,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--points", type=int, help="tracking tasks: number of waypoints (re-samples the path)")
     run.add_argument("--no-progress", action="store_true", help="tracking tasks: no progress bar")
     run.add_argument("--output", type=Path, help="tracking tasks: write the joint path and errors per waypoint (.csv)")
+    run.add_argument("--record", type=Path, metavar="FILE.rrd",
+                     help="write a rerun recording of the run (open it with `metaik replay FILE.rrd`)")
 
     sub.add_parser("tasks", help="list the shipped task files")
+    add_bench_command(sub)
+    add_replay_command(sub)
     return parser
 
 
@@ -50,7 +57,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     console = Console()
     try:
-        return {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks}[args.command](args, console)
+        commands = {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks, "bench": bench_command,
+                    "replay": replay_command}
+        return commands[args.command](args, console)
     except MetaikError as err:
         Console(stderr=True).print(f"[bold red]error:[/] {err}", highlight=False, markup=True, soft_wrap=True)
         return EXIT_INPUT
@@ -108,19 +117,6 @@ def _tasks(args, console: Console) -> int:
     return EXIT_OK
 
 
-def resolve_task(name: str) -> Path:
-    """A task file path from a path or the name of a shipped task."""
-    from .resources import data_dir
-
-    path = Path(name)
-    if path.is_file():
-        return path
-    shipped = data_dir("tasks") / (name if name.endswith(".toml") else f"{name}.toml")
-    if shipped.is_file():
-        return shipped
-    raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
-
-
 def _run(args, console: Console) -> int:
     from .solve import solve
     from .taskfile import load_task
@@ -144,7 +140,7 @@ def _run(args, console: Console) -> int:
     rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
                                                    "evaluations", "time (s)")}
     all_ok = True
-    with console.status("solving") as status:
+    with console.status("solving") as status, _recorder(args, task, settings) as recorder:
         for case in cases:
             status.update(f"solving {case.name}")
             result = solve(
@@ -156,7 +152,10 @@ def _run(args, console: Console) -> int:
                 tolerance=settings.get("tolerance", 1e-4),
                 stop_at_tolerance=settings.get("stop_at_tolerance", False),
                 options=settings.get("options"),
+                callback=recorder.term_logger(case.problem, case.name) if recorder else None,
             )
+            if recorder:
+                recorder.log_case(case, result)
             all_ok &= result.success
             table.add_column(case.name, justify="right")
             for n in names:
@@ -174,27 +173,55 @@ def _run(args, console: Console) -> int:
     groups = task.robot.groups or {"all": np.arange(task.robot.n)}
     console.print(f"configuration of {cases[-1].name}: " + "; ".join(
         f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
+    _recorded(args, console)
     return EXIT_OK if all_ok else EXIT_MISSED
+
+
+def _recorder(args, task, settings: dict):
+    """A :class:`Recorder` of this run when ``--record FILE`` was given, else a context yielding None."""
+    if getattr(args, "record", None) is None:
+        return nullcontext()
+    return Recorder.for_task(args.record, task, settings={**settings, "command": " ".join(sys.argv)})
+
+
+def _recorded(args, console: Console) -> None:
+    if getattr(args, "record", None) is not None:
+        console.print(f"recorded the run to {args.record} (open it with `metaik replay {args.record}`)")
 
 
 def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> int:
     """``metaik run`` of a tracking task: track every case's trajectory, then one summary table."""
-    from .tracking import track
-
     cases = [c for c in task.cases if not args.case or c.name in args.case]
     if not cases:
         raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
-    iterations = settings.get("max_iterations", 300)
     console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
-                  f"({iterations} iterations per point): {task.description}")
+                  f"({settings.get('max_iterations', 300)} iterations per point): {task.description}")
     tolerance = settings.get("tolerance", 1e-4)
-    results, interrupted = [], False
+    results: list = []
+    with _recorder(args, task, settings) as recorder:
+        interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results)
+    console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
+    if args.output is not None:
+        write_tracking_csv(args.output, task.robot, results)
+        console.print(f"wrote {args.output}")
+    _recorded(args, console)
+    if interrupted:
+        Console(stderr=True).print("interrupted: the table shows the waypoints done")
+        return EXIT_INTERRUPTED
+    return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
+
+
+def _track_cases(args, task, cases, settings, solver, tolerance, recorder, results: list) -> bool:
+    """Track each case in turn, appending ``(case, result)`` to ``results`` (and to the recording, if any);
+    returns True when Ctrl-C stopped the run."""
+    from .tracking import track
+
     for case in cases:
         result = track(
             task.robot, case.trajectory, case.builder,
             solver=solver,
             seed=settings.get("seed", 0),
-            iterations_per_point=iterations,
+            iterations_per_point=settings.get("max_iterations", 300),
             population=settings.get("population", 30),
             initial=case.initial,
             warm_start=settings.get("warm_start", True),
@@ -206,17 +233,11 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
             progress=False if args.no_progress else None,
         )
         results.append((case, result))
+        if recorder:
+            recorder.log_case(case, result)
         if result.stop_reason == "interrupted":
-            interrupted = True
-            break
-    console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
-    if args.output is not None:
-        write_tracking_csv(args.output, task.robot, results)
-        console.print(f"wrote {args.output}")
-    if interrupted:
-        Console(stderr=True).print("interrupted: the table shows the waypoints done")
-        return EXIT_INTERRUPTED
-    return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
+            return True
+    return False
 
 
 def tracking_table(task, results: list, solver: str, seed: int, tolerance: float) -> Table:

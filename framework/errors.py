@@ -56,3 +56,8 @@ class RecordingError(MetaikError):
 
 class ViewerError(MetaikError):
     """The meshcat viewer or the headless browser cannot do what was asked."""
+
+
+#: Exit codes of the ``metaik`` command: success; the run finished but a case missed its tolerance;
+#: bad input (one clear line on stderr, no traceback); interrupted by Ctrl-C.
+EXIT_OK, EXIT_MISSED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130

@@ -71,6 +71,7 @@ from .costs import JointLimitPenalty, Motion, Objective, Orientation, Position, 
 from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
+from .resources import data_dir
 from .robot import Robot
 from .trajectory import Trajectory, circle, lemniscate, line, paper000, rose, sinusoid
 
@@ -197,6 +198,17 @@ class TaskFile:
     def is_tracking(self) -> bool:
         """True for a trajectory-tracking task (a ``[trajectory]`` table, top level or per case)."""
         return any(c.is_tracking for c in self.cases)
+
+
+def resolve_task(name: str) -> Path:
+    """A task file path from a path or the name of a shipped task."""
+    path = Path(name)
+    if path.is_file():
+        return path
+    shipped = data_dir("tasks") / (name if name.endswith(".toml") else f"{name}.toml")
+    if shipped.is_file():
+        return shipped
+    raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
 
 
 def load_task(path: str | Path, *, points: int | None = None) -> TaskFile:

@@ -106,8 +106,52 @@ def test_unknown_robot_in_show(capsys):
 
 
 def test_help_everywhere(capsys):
-    for argv in (["--help"], ["run", "--help"], ["show", "--help"], ["robots", "--help"]):
+    for argv in (["--help"], ["run", "--help"], ["show", "--help"], ["robots", "--help"], ["tasks", "--help"],
+                 ["bench", "--help"], ["replay", "--help"]):
         with pytest.raises(SystemExit) as stop:
             main(argv)
         assert stop.value.code == 0
     assert "task" in capsys.readouterr().out
+
+
+def test_run_record_writes_what_the_table_shows(tmp_path, capsys):
+    from framework.recording import read_recording
+
+    path = tmp_path / "run.rrd"
+    argv = ["run", str(TASK), "--solver", "hybrid", "--case", "target 1", "--case", "target 3", "--record", str(path)]
+    assert main(argv) == EXIT_OK
+    out = capsys.readouterr().out
+    recording = read_recording(path)
+    assert recording.complete and {"solution", "iteration"} <= recording.timelines
+    _, errors = recording.scalars("/summary/task_error", "solution")
+    _, names = recording.values("/summary/name", "TextDocument:text", "solution")
+    assert [n[0] for n in names] == ["target 1", "target 3"]
+    row = next(line for line in out.splitlines() if "task error" in line)
+    printed = [float(cell) for cell in row.split("│")[2:4]]
+    np.testing.assert_allclose(errors, printed, rtol=0.01, atol=1e-15)  # the table prints 3 digits
+    # every solver iteration of the global phase traced the terms (term logger wired to solve's callback)
+    iterations, _ = recording.scalars("/solutions/target_1/terms/e_t1", "iteration")
+    assert len(iterations) > 5
+    assert main(["replay", str(path), "--summary"]) == EXIT_OK
+    assert "target 3: task error" in capsys.readouterr().out
+
+
+def test_replay_and_bench_bad_input_exit_2(tmp_path, capsys):
+    assert main(["replay", str(tmp_path / "missing.rrd"), "--summary"]) == EXIT_INPUT
+    assert "missing.rrd" in capsys.readouterr().err
+    assert main(["bench", str(tmp_path / "missing.toml")]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "missing.toml" in err and "Traceback" not in err
+    assert main(["run", str(TASK), "--case", "no such case"]) == EXIT_INPUT
+    assert "no case named" in capsys.readouterr().err
+
+
+def test_bench_through_the_command_line(tmp_path, capsys):
+    path = tmp_path / "reach.toml"
+    path.write_text(MINIMAL + "\n[bench]\nsolvers = [\"de\", \"hybrid\"]\nruns = 2\n")
+    out = tmp_path / "out"
+    argv = ["bench", str(path), "--iterations", "40", "--jobs", "1", "--out", str(out), "--no-figures"]
+    assert main(argv) == EXIT_OK
+    assert len((out / "results.jsonl").read_text().splitlines()) == 4
+    table = capsys.readouterr().out
+    assert "hybrid" in table and "de" in table
