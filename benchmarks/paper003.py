@@ -34,18 +34,17 @@ import shapely.plotting
 import framework as fw
 from framework.fabrik import (
     BaseOrientation,
-    Circle,
     Environment,
     MFabrik,
     MobileArm,
-    Polygon,
     ReachResult,
-    Rectangle,
 )
 from framework.fabrik.jacobian import JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
 from framework.fabrik.tracking import Tracking, track
+from framework.taskfile import load_task
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "results"
+TASKS_DIR = Path(__file__).resolve().parents[1] / "tasks"
 TOLERANCES_MM = (1.0, 0.1, 0.01, 0.001)
 TASKS = 1000
 MAX_ITERATIONS = 1000
@@ -83,18 +82,9 @@ def random_tasks(robot: fw.Robot, rng: np.random.Generator, count: int) -> tuple
     return targets, robot.random_configurations(rng, count)
 
 
-def sinusoid_path() -> np.ndarray:
-    """21 set-points ``(21, 3)`` [m]: x from -1 to 1 m, y = 0.5 + 0.15 sin(πx), z = 0.35 m (our choice)."""
-    x = np.linspace(-1.0, 1.0, 21)
-    return np.column_stack([x, 0.5 + 0.15 * np.sin(np.pi * x), np.full_like(x, 0.35)])
-
-
-def start_configuration(robot: fw.Robot, base: tuple[float, float, float]) -> np.ndarray:
-    """The base at ``base`` with the arm folded up (joint 2 at 30°, 3 at -60°, 4 at 30°)."""
-    x = np.zeros(robot.n)
-    x[:3] = base
-    x[4:7] = np.radians([30.0, -60.0, 30.0])
-    return x
+def sinusoid_task():
+    """The 21-point path of ``tasks/paper003_sinusoid.toml``: x from -1 to 1 m, y = 0.5 + 0.15 sin(πx), z = 0.35 m."""
+    return load_task(TASKS_DIR / "paper003_sinusoid.toml")
 
 
 @dataclass(frozen=True)
@@ -108,38 +98,12 @@ class Scenario:
 
 
 def scenarios(robot: fw.Robot) -> list[Scenario]:
-    box = ((-1.5, 1.5), (-1.5, 1.5))
-    x = np.linspace(-1.2, 1.2, 21)
-    square = Scenario(
-        "square",
-        "Experiment 2: a sinusoid over a square obstacle",
-        Environment([Rectangle((0.0, 0.0), (0.4, 0.4))], margin=0.2, bounds=box),
-        np.column_stack([x, 0.15 * np.sin(np.pi * x / 1.2), np.full_like(x, 0.3)]),
-        start_configuration(robot, (-1.3, -0.6, 0.0)),
-        BaseOrientation.FOLLOW_JOINT1,
-    )
-    wall = Rectangle((0.0, 1.4), (3.2, 0.3))
-    wedge = Polygon(((-1.6, -1.6), (1.6, -1.6), (1.6, 0.35), (-1.6, -0.5)))
-    x = np.linspace(-1.2, 1.2, 20)
-    corridor = Scenario(
-        "corridor",
-        "Experiment 3: drawing on a wall along a narrowing corridor, base heading fixed",
-        Environment([wall, wedge], margin=0.2, bounds=box),
-        np.column_stack([x, np.full_like(x, 1.2), 0.35 + 0.05 * np.sin(2 * np.pi * x / 1.2)]),
-        start_configuration(robot, (-1.3, 0.6, math.pi / 2)),
-        BaseOrientation.FIXED,
-    )
-    l_shape = Polygon(((-0.3, -0.9), (0.5, -0.9), (0.5, -0.7), (-0.1, -0.7), (-0.1, 0.6), (-0.3, 0.6)))
-    x = np.linspace(-1.2, 1.2, 25)
-    two = Scenario(
-        "l_shape",
-        "Experiment 4: an L-shaped obstacle and a column",
-        Environment([l_shape, Circle((0.9, 0.8), 0.15)], margin=0.2, bounds=box),
-        np.column_stack([x, 0.25 * np.cos(np.pi * x / 1.2) - 0.1, np.full_like(x, 0.4)]),
-        start_configuration(robot, (-1.2, -1.0, 0.0)),
-        BaseOrientation.FACE_TARGET,
-    )
-    return [square, corridor, two]
+    """The obstacle scenarios of ``tasks/paper003_obstacles_{square,corridor,l_shape}.toml``."""
+    out = []
+    for name in ("square", "corridor", "l_shape"):
+        task = load_task(TASKS_DIR / f"paper003_obstacles_{name}.toml")
+        out.append(Scenario(name, task.description, task.environment, task.targets, task.start, task.orientation))
+    return out
 
 
 # ---------------------------------------------------------------------------------------------- runs
@@ -372,8 +336,8 @@ def main(tasks: int = TASKS) -> None:
     plot_iterations(OUT / "paper003_iterations.png", samples)
 
     print("21-point path", flush=True)
-    path_targets = sinusoid_path()
-    path_start = start_configuration(robot, (-1.2, -0.1, 0.0))
+    path_task = sinusoid_task()
+    path_targets, path_start = path_task.targets, path_task.start
     path_solver = MFabrik(arm, orientation=BaseOrientation.FOLLOW_JOINT1)
     trackings = {
         "m-fabrik": track(

@@ -53,7 +53,6 @@ from .costs import Motion, Orientation, Position, RelativePosition
 from .errors import EXIT_INTERRUPTED, EXIT_OK, MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
-from .taskfile import resolve_task
 from .stats import (
     METRICS,
     group_records,
@@ -64,6 +63,7 @@ from .stats import (
     summary_rows,
     terms_markdown,
 )
+from .taskfile import resolve_task
 
 HISTORY_POINTS = 200
 BENCH_KEYS = {
@@ -1064,7 +1064,7 @@ def bench_command(args, console) -> int:
         )
         written.append(write_doc(doc, args.title or f"Benchmark: {grid.name}", command_line(args), body))
     table = Table(title=f"{grid.name}: task error over {len(records)}/{len(grid.specs)} runs")
-    for column in ("group", "solver", "runs", "mean", "std", "best", "worst", "success", "median time [s]"):
+    for column in ("group", "solver", "runs", "mean", "std", "best", "worst", "success", "median time (s)"):
         table.add_column(column, justify="left" if column in ("group", "solver") else "right")
     for r in summary_rows(records, group_by=grid.group_by, tolerance=grid.tolerance):
         e = r.stats["task_error"]

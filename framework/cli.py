@@ -14,13 +14,13 @@ from pathlib import Path
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .bench import add_bench_command, bench_command
 from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
 from .recording import Recorder, add_replay_command, replay_command
 from .taskfile import resolve_task
-
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -42,7 +42,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--population", type=int, help="override the population size")
     run.add_argument("--case", action="append", help="only these cases (by name); repeatable")
     run.add_argument("--points", type=int, help="tracking tasks: number of waypoints (re-samples the path)")
-    run.add_argument("--no-progress", action="store_true", help="tracking tasks: no progress bar")
+    run.add_argument("--no-progress", action="store_true", help="tracking and reach tasks: no progress bar")
     run.add_argument("--output", type=Path, help="tracking tasks: write the joint path and errors per waypoint (.csv)")
     run.add_argument("--record", type=Path, metavar="FILE.rrd",
                      help="write a rerun recording of the run (open it with `metaik replay FILE.rrd`)")
@@ -122,6 +122,8 @@ def _run(args, console: Console) -> int:
     from .taskfile import load_task
 
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
+    if not hasattr(task, "cases"):  # a [reach] task: M-FABRIK or its Jacobian baselines
+        return _run_reach(args, console, task)
     settings = dict(task.solver)
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}
@@ -167,7 +169,7 @@ def _run(args, console: Console) -> int:
             rows["evaluations"].append(str(result.evaluations))
             rows["time (s)"].append(f"{result.wall_time:.3f}")
     for label, cells in rows.items():
-        table.add_row(label, *cells)
+        table.add_row(escape(label), *cells)
     console.print(table)
     x = result.configuration
     groups = task.robot.groups or {"all": np.arange(task.robot.n)}
@@ -175,6 +177,59 @@ def _run(args, console: Console) -> int:
         f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
     _recorded(args, console)
     return EXIT_OK if all_ok else EXIT_MISSED
+
+
+def _run_reach(args, console: Console, task) -> int:
+    """``metaik run`` of a reach task (paper 003): random targets or a path, with obstacles and Algorithm 2."""
+    from rich.progress import Progress
+
+    from .fabrik.taskfile import run_reach_task
+
+    solver = args.solver or task.solver["name"]
+    what = f"{len(task.targets)} set-points of a path" if task.is_path else f"{task.random} random targets"
+    console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF) with {solver}, {what}, "
+                  f"tolerance {task.solver['tolerance'] * 1e3:g} mm: {task.description}")
+    with Progress(console=console, transient=True, disable=args.no_progress) as bar:
+        job = bar.add_task("solving", total=task.random or None)
+        run = run_reach_task(task, solver=solver, progress=lambda k, total: bar.update(job, completed=k))
+    errors = np.array([r.position_error for r in run.results])
+    iterations = np.array([r.iterations for r in run.results])
+    times = np.array([r.wall_time for r in run.results]) * 1e3
+    table = Table(title=f"{task.name}: {solver}")
+    table.add_column("")
+    table.add_column("value", justify="right")
+    rows = [
+        ("targets reached", f"{sum(r.success for r in run.results)}/{len(run.results)}"),
+        ("position error, mean / max [m]", f"{errors.mean():.2e} / {errors.max():.2e}"),
+        ("iterations, mean / max / total", f"{iterations.mean():.2f} / {iterations.max()} / {iterations.sum()}"),
+        ("time per solve, mean / max [ms]", f"{times.mean():.3f} / {times.max():.3f}"),
+        ("unreachable", str(sum(r.reason.startswith("unreachable") for r in run.results))),
+    ]
+    if task.environment is not None:
+        bases = run.base_positions
+        clearance = min(task.environment.clearance(*p) for p in bases)
+        inside = sum(task.environment.in_rejection(*p) for p in bases)
+        rows += [("base positions in the rejection area", f"{inside} of {len(bases)}"),
+                 ("least base clearance to an obstacle [m]", f"{clearance:.3f} (margin {task.environment.margin:g})")]
+    if run.tracking is not None and task.step is not None and solver == "mfabrik":
+        steps = [s for s in run.tracking.steps if s is not None]
+        gaps = [float(np.linalg.norm(np.diff(s.bases, axis=0), axis=1).max()) for s in steps if len(s.bases) > 1]
+        rows += [("Algorithm 2: intermediate configurations", str(sum(len(s.configurations) for s in steps))),
+                 ("Algorithm 2: largest base step [m]", f"{max(gaps, default=0.0):.3f} (ρ = {task.step:g})")]
+    for label, value in rows:
+        table.add_row(escape(label), value)
+    console.print(table)
+    if args.record is not None:
+        from .recording import Recorder
+
+        with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
+            targets = task.targets if task.is_path else task.random_pairs()[0]
+            recorder.log_path(np.array([r.configuration for r in run.results]), desired={task.frame: targets},
+                              errors={"position_error": errors, "iterations": iterations.astype(float)},
+                              name=task.name, settings={"solver": solver, **task.solver})
+        _recorded(args, console)
+    ok = all(r.success for r in run.results) and (run.tracking is None or run.tracking.success)
+    return EXIT_OK if ok else EXIT_MISSED
 
 
 def _recorder(args, task, settings: dict):
@@ -269,7 +324,7 @@ def tracking_table(task, results: list, solver: str, seed: int, tolerance: float
         for label, cell in zip(rows, cells):
             rows[label].append(cell)
     for label, cells in rows.items():
-        table.add_row(label, *cells)
+        table.add_row(escape(label), *cells)
     return table
 
 

@@ -63,7 +63,7 @@ import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -74,6 +74,9 @@ from .problem import Problem
 from .resources import data_dir
 from .robot import Robot
 from .trajectory import Trajectory, circle, lemniscate, line, paper000, rose, sinusoid
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .fabrik.taskfile import ReachTask
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -211,8 +214,10 @@ def resolve_task(name: str) -> Path:
     raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
 
 
-def load_task(path: str | Path, *, points: int | None = None) -> TaskFile:
+def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | ReachTask:
     """Parse and validate a task file; every error names the file and the entry at fault.
+
+    A file with a ``[reach]`` table is a reach task for M-FABRIK (:class:`framework.fabrik.taskfile.ReachTask`).
 
     ``points`` overrides the number of waypoints of a tracking task (parametric paths are re-sampled, paths
     from files or lists keep ``points`` evenly spaced waypoints).
@@ -225,6 +230,10 @@ def load_task(path: str | Path, *, points: int | None = None) -> TaskFile:
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise TaskError(f"{path}: not valid TOML: {err}") from err
     try:
+        if "reach" in raw:  # a position-reach task for M-FABRIK and its baselines (framework.fabrik.taskfile)
+            from .fabrik.taskfile import reach_task_from_dict
+
+            return reach_task_from_dict(raw, path, points=points)
         return _parse(path, raw, points=points)
     except MetaikError as err:
         if str(path) in str(err):
@@ -314,7 +323,7 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
             raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}")
         weight = evaluate(spec.get("weight", 1.0), variables, f"{where} weight")
         name = spec.get("name")
-        value = lambda key: evaluate(spec[key], variables, f"{where} {key}")  # noqa: E731
+        value = lambda key: evaluate(spec[key], variables, f"{where} {key}")
         try:
             if kind == "position":
                 term = Position(spec["frame"], value("target"), name=name)
