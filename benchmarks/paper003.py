@@ -411,6 +411,11 @@ def write_report(
             "Pinocchio's forward kinematics at those coordinates."
         ),
         "",
+        (
+            "The experiments are task files, each runnable alone: `metaik run paper003_random_targets [--solver "
+            "pinv|dls]`, `metaik run paper003_sinusoid`, `metaik run paper003_obstacles_{square,corridor,l_shape}`."
+        ),
+        "",
         f"## Tables 2-3: {tasks} random targets and start configurations",
         "",
         (

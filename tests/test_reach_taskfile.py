@@ -110,3 +110,14 @@ def test_the_base_file_itself_runs(tmp_path, capsys):
     path = tmp_path / "reach.toml"
     path.write_text(BASE)
     assert main(["run", str(path)]) == EXIT_OK
+
+
+def test_every_shipped_task_file_loads():
+    from framework.taskfile import TaskFile
+
+    paths = sorted(TASKS.glob("*.toml"))
+    assert len(paths) >= 23
+    for path in paths:
+        task = load_task(path, points=5)
+        assert isinstance(task, (TaskFile, ReachTask)), path
+        assert task.robot.n > 0 and task.name
