@@ -433,7 +433,7 @@ def write_report(
             f"{math.degrees(s.max_step):.0f}° (or {s.max_step:.3f} m), pseudo-inverse cut-off {s.rcond}·σ_max, DLS "
             f"damping λ = {s.damping} m; coordinates clipped to their bounds after each step (`base_theta`, whose "
             "bounds span a full turn, wrapped). M-FABRIK: base heading rule `follow_joint1`, no obstacles, navigable "
-            "area = the base bounds; restarts from a random arm shape (seeded) when the error has not halved in 10 "
+            "area = the base bounds; restarts from a random arm shape (seeded) when the error has not halved in 4 "
             "iterations (at most 10), then the best attempt is finished."
         ),
         "",
@@ -539,7 +539,7 @@ NOTES = [
     ),
     (
         "- **Joint limits and restarts.** FABRIK's clamping at joint limits can trap the chain; when the error has not "
-        "halved in 10 iterations the arm restarts from a random shape (seeded generator, so solves are deterministic), "
+        "halved in 4 iterations (a window of 10 cost ≈40% more iterations on average) the arm restarts from a random shape (seeded generator, so solves are deterministic), "
         "keeping the base where it stands. This is our addition; the paper reports no failures and no restarts."
     ),
     (

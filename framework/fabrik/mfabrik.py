@@ -76,7 +76,7 @@ class MFabrik:
         orientation: BaseOrientation | str = BaseOrientation.FOLLOW_JOINT1,
         keep_link: bool = True,
         reach_margin: float = 0.2,
-        window: int = 10,
+        window: int = 4,
         restarts: int = 10,
         seed: int = 0,
     ) -> None:
