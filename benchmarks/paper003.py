@@ -370,7 +370,7 @@ def main(tasks: int = TASKS) -> None:
         finals = tracking.configurations[:, :2]
         clearance = min(scenario.environment.clearance(*p) for p in np.vstack([bases, finals]))
         longest = max(
-            float(np.linalg.norm(np.diff(s.bases, axis=0), axis=1).max()) for s in tracking.steps if s
+            s.longest_step for s in tracking.steps if s
         )
         scenario_rows.append((scenario, tracking, clearance, longest))
 

@@ -19,6 +19,7 @@ from rich.table import Table
 
 from .bench import add_bench_command, bench_command
 from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
+from .fabrik.taskfile import ReachTask
 from .recording import Recorder, add_replay_command, replay_command
 from .taskfile import resolve_task
 
@@ -122,7 +123,7 @@ def _run(args, console: Console) -> int:
     from .taskfile import load_task
 
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
-    if not hasattr(task, "cases"):  # a [reach] task: M-FABRIK or its Jacobian baselines
+    if isinstance(task, ReachTask):  # M-FABRIK or its Jacobian baselines
         return _run_reach(args, console, task)
     settings = dict(task.solver)
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
@@ -213,15 +214,13 @@ def _run_reach(args, console: Console, task) -> int:
                  ("least base clearance to an obstacle [m]", f"{clearance:.3f} (margin {task.environment.margin:g})")]
     if run.tracking is not None and task.step is not None and solver == "mfabrik":
         steps = [s for s in run.tracking.steps if s is not None]
-        gaps = [float(np.linalg.norm(np.diff(s.bases, axis=0), axis=1).max()) for s in steps if len(s.bases) > 1]
+        gaps = [s.longest_step for s in steps]
         rows += [("Algorithm 2: intermediate configurations", str(sum(len(s.configurations) for s in steps))),
                  ("Algorithm 2: largest base step [m]", f"{max(gaps, default=0.0):.3f} (ρ = {task.step:g})")]
     for label, value in rows:
         table.add_row(escape(label), value)
     console.print(table)
     if args.record is not None:
-        from .recording import Recorder
-
         with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
             targets = task.targets if task.is_path else task.random_pairs()[0]
             recorder.log_path(np.array([r.configuration for r in run.results]), desired={task.frame: targets},

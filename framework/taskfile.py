@@ -230,9 +230,9 @@ def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | Reac
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
         raise TaskError(f"{path}: not valid TOML: {err}") from err
     try:
-        if "reach" in raw:  # a position-reach task for M-FABRIK and its baselines (framework.fabrik.taskfile)
-            from .fabrik.taskfile import reach_task_from_dict
+        from .fabrik.taskfile import is_reach_task, reach_task_from_dict
 
+        if is_reach_task(raw):  # a position-reach task for M-FABRIK and its baselines
             return reach_task_from_dict(raw, path, points=points)
         return _parse(path, raw, points=points)
     except MetaikError as err:

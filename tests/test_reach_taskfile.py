@@ -121,3 +121,13 @@ def test_every_shipped_task_file_loads():
         task = load_task(path, points=5)
         assert isinstance(task, (TaskFile, ReachTask)), path
         assert task.robot.n > 0 and task.name
+
+
+def test_a_baseline_task_run_with_mfabrik_keeps_its_algorithm_2_step(tmp_path):
+    path = tmp_path / "reach.toml"
+    path.write_text(BASE.replace("[reach]", '[solver]\nname = "dls"\n[reach]\nstep = 0.02'))
+    task = load_task(path)
+    assert task.step == 0.02
+    assert all(s is None for s in run_reach_task(task).tracking.steps)  # the baselines do not plan base steps
+    steps = run_reach_task(task, solver="mfabrik").tracking.steps
+    assert all(s is not None and s.longest_step <= 0.02 + 1e-9 for s in steps)

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..baselines.jacobian import dls_inverse, svd_pinv
 from ..robot import JointKind, Robot
 from .fabrik import _check_target
 from .kinematics import PointKinematics
@@ -53,12 +54,12 @@ class JacobianSettings:
 
 def pseudo_inverse_step(J: np.ndarray, e: np.ndarray, settings: JacobianSettings) -> np.ndarray:
     """``J⁺ e`` with singular values below ``rcond·σ_max`` dropped."""
-    return np.linalg.pinv(J, rcond=settings.rcond) @ e
+    return svd_pinv(J, settings.rcond) @ e
 
 
 def damped_least_squares_step(J: np.ndarray, e: np.ndarray, settings: JacobianSettings) -> np.ndarray:
     """``Jᵀ (J Jᵀ + λ² I)⁻¹ e``."""
-    return J.T @ np.linalg.solve(J @ J.T + settings.damping**2 * np.eye(J.shape[0]), e)
+    return dls_inverse(J, settings.damping) @ e
 
 
 class JacobianIK:

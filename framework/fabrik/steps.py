@@ -44,6 +44,11 @@ class Steps:
     success: bool
     reason: str
 
+    @property
+    def longest_step(self) -> float:
+        """The largest distance [m] between consecutive base positions (Algorithm 2 keeps it <= ρ)."""
+        return float(np.linalg.norm(np.diff(self.bases, axis=0), axis=1).max())
+
 
 def intermediate_configurations(
     solver: MFabrik, previous: np.ndarray, new: np.ndarray, target: np.ndarray, step: float

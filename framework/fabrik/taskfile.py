@@ -71,7 +71,8 @@ class ReachTask:
         robot: the mobile manipulator; ``frame`` its end-effector.
         solver: ``name``, ``tolerance`` [m], ``max_iterations``, ``seed``.
         orientation: the base heading rule of M-FABRIK.
-        step: Algorithm 2's ρ [m], or None.
+        step: Algorithm 2's ρ [m], or None (M-FABRIK only: the Jacobian baselines solve the same set-points
+            without it, see :func:`run_reach_task`).
         environment: obstacles, margin and navigable box (None: free floor).
         start: the start configuration ``(n,)`` (None with random starts).
         targets: set-points ``(m, 3)`` [m] of a path, or None for random targets.
@@ -184,8 +185,6 @@ def reach_task_from_dict(raw: Mapping[str, Any], path: Path, *, points: int | No
     if targets is not None and start is None:
         raise TaskError("[reach] a path needs a start configuration (start = { base = [...], arm = [...] })")
     environment = _environment(reach["environment"]) if "environment" in reach else None
-    if step is not None and solver["name"] != "mfabrik":
-        step = None  # Algorithm 2 belongs to M-FABRIK; the baselines solve the same set-points without it
     return ReachTask(path, str(task.get("name", path.stem)), str(task.get("description", "")), robot, frame,
                      solver, orientation, step, environment, start, targets, random)
 
