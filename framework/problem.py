@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .costs import JointLimitPenalty, Objective, Term
+from .costs import JointLimitPenalty, Motion, Objective, Term
 from .errors import TaskError
 from .robot import Robot
 
@@ -98,6 +98,18 @@ class Problem:
     def repair_mode(self) -> str:
         """Bounds mode for the optimizer loop (``"none"`` when a penalty term handles the box)."""
         return "none" if self.bounds == "penalty" else self.bounds
+
+    @property
+    def previous(self) -> np.ndarray | None:
+        """``(n,)`` the configuration the motion terms measure from (box middle on joints no motion term covers),
+        clipped to the box; ``None`` when the objective has no motion term. The natural warm start."""
+        motions = [t for _, t in self.objective if isinstance(t, Motion)]
+        if not motions:
+            return None
+        x = self.robot.middle.copy()
+        for term in motions:
+            x[term.indices(self.robot)] = term.previous_values(self.robot)
+        return np.clip(x, self.robot.lower, self.robot.upper)
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, k)`` unweighted term values for a population ``X`` ``(pop, n)``."""

@@ -12,12 +12,13 @@ problem's own objective*, so refinement never makes it worse.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import minimize as scipy_minimize
 
-from .costs import JointLimitPenalty, LocalKinematics, Orientation
+from .costs import JointLimitPenalty, Linearization, LocalKinematics, Orientation
 from .problem import Problem
 
 
@@ -33,47 +34,48 @@ class Refinement:
 
 
 class _Residuals:
-    """Task residuals ``r(x)`` and Jacobians ``J(x)`` of a problem, stacked, cached per configuration."""
+    """Every term linearized at one configuration (one kinematics call, cached per configuration): the stacked
+    task residuals ``r(x)`` and Jacobians ``J(x)``, and the weighted objective's value and gradient."""
 
     def __init__(self, problem: Problem):
         self.problem = problem
         self.task = [t for _, t in problem.objective if t.is_task]
+        self._is_task = problem.task_mask
+        self._weights = problem.weights
         self.evaluations = 0
         self._key: bytes | None = None
         self._data = problem.robot.model.createData()
 
-    def local(self, x: np.ndarray) -> LocalKinematics:
+    def linearize(self, x: np.ndarray) -> list[Linearization]:
+        """Each term of the objective at ``x``, in objective order."""
         key = x.tobytes()
         if key != self._key:
-            self._key, self._cache = key, LocalKinematics(self.problem.robot, x, self._data)
+            robot = self.problem.robot
+            local = LocalKinematics(robot, x, self._data)
+            self._key, self._cache = key, [t.linearize(robot, x, local) for _, t in self.problem.objective]
             self.evaluations += 1
         return self._cache
 
     def r(self, x: np.ndarray) -> np.ndarray:
-        local = self.local(x)
-        return np.concatenate([t.residual(self.problem.robot, x, local) for t in self.task])
+        return np.concatenate([lin.residual for lin, task in zip(self.linearize(x), self._is_task) if task])
 
     def J(self, x: np.ndarray) -> np.ndarray:
-        local = self.local(x)
-        return np.vstack([t.jacobian(self.problem.robot, x, local) for t in self.task])
+        return np.vstack([lin.jacobian for lin, task in zip(self.linearize(x), self._is_task) if task])
 
+    def weighted(self, which: str):
+        """``x -> (f, ∇f)`` of the weighted sum of ``"all"`` the terms or of the ``"regularizer"`` (non-task) ones."""
+        weights = self._weights if which == "all" else np.where(self._is_task, 0.0, self._weights)
+        active = [k for k, w in enumerate(weights) if w != 0.0]
 
-def _weighted(problem: Problem, residuals: _Residuals, which: str):
-    """``x -> (f, ∇f)`` of the weighted sum of the ``"all"`` terms or the ``"regularizer"`` (non-task) terms."""
-    robot = problem.robot
-    mask = np.ones(len(problem.names), bool) if which == "all" else ~problem.task_mask
-    weights = np.where(mask, problem.weights, 0.0)
-    terms = [(w, t) for w, (_, t), m in zip(weights, problem.objective, mask) if m]
+        def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
+            terms = self.linearize(x)
+            value, grad = 0.0, np.zeros_like(x)
+            for k in active:
+                value += weights[k] * terms[k].value
+                grad += weights[k] * terms[k].gradient
+            return value, grad
 
-    def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
-        local = residuals.local(x)
-        value = float(problem.values(x)[0] @ weights)
-        grad = np.zeros_like(x)
-        for w, term in terms:
-            grad += w * term.gradient(robot, x, local)
-        return value, grad
-
-    return fun
+        return fun
 
 
 def _reaching_is_optimal(problem: Problem, residuals: _Residuals, x: np.ndarray, tolerance: float) -> bool:
@@ -88,13 +90,13 @@ def _reaching_is_optimal(problem: Problem, residuals: _Residuals, x: np.ndarray,
         return False
     if np.any(x <= robot.lower) or np.any(x >= robot.upper):
         return False
-    _, grad = _weighted(problem, residuals, "regularizer")(x)
+    _, grad = residuals.weighted("regularizer")(x)
     lam = np.linalg.lstsq(residuals.J(x).T, grad, rcond=None)[0]
     start = 0
-    for weight, term in problem.objective:
+    for (weight, term), lin in zip(problem.objective, residuals.linearize(x)):
         if not term.is_task:
             continue
-        size = len(term.residual(robot, x, residuals.local(x)))
+        size = len(lin.residual)
         limit = weight / 2 if isinstance(term, Orientation) else weight
         if np.linalg.norm(lam[start : start + size]) >= limit:
             return False
@@ -148,19 +150,30 @@ def gauss_newton(
     return x
 
 
+def _on_kink(problem: Problem, residuals: _Residuals, x: np.ndarray) -> bool:
+    """Whether a non-task term with a residual view (a motion term) is exactly zero at ``x``: not differentiable."""
+    terms = zip(problem.objective, residuals.linearize(x))
+    return any(not t.is_task and lin.residual is not None and lin.value == 0.0 for (_, t), lin in terms)
+
+
 def _constrained(
-    problem: Problem, residuals: _Residuals, x0: np.ndarray, tolerance: float, max_iterations: int
+    problem: Problem, residuals: _Residuals, x0: np.ndarray, tolerance: float, max_iterations: int, callback=None
 ) -> list[tuple[np.ndarray, str]]:
     """SLSQP on the non-task terms subject to ``r(x) = 0`` in the box, Gauss-Newton polish; LM if that fails."""
     lower, upper = problem.robot.lower, problem.robot.upper
+    if _on_kink(problem, residuals, x0):
+        # A regularizer at zero (x0 = the previous configuration, say) has no gradient there, and SLSQP crawls
+        # (≈90 iterations instead of ≈15): one minimum-norm Gauss-Newton step towards the task first.
+        x0 = gauss_newton(residuals, x0, lower, upper, steps=1)
     slsqp = scipy_minimize(
-        _weighted(problem, residuals, "regularizer"),
+        residuals.weighted("regularizer"),
         x0,
         jac=True,
         method="SLSQP",
         bounds=list(zip(lower, upper)),
         constraints=[{"type": "eq", "fun": residuals.r, "jac": residuals.J}],
         options={"maxiter": max_iterations, "ftol": 1e-12},
+        callback=callback,
     )
     x = gauss_newton(residuals, np.clip(slsqp.x, lower, upper), lower, upper, steps=10)
     out = [(x, "slsqp+gauss-newton")]
@@ -170,7 +183,14 @@ def _constrained(
     return out
 
 
-def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_iterations: int = 100) -> Refinement:
+def refine(
+    problem: Problem,
+    x0: np.ndarray,
+    *,
+    tolerance: float = 1e-12,
+    max_iterations: int = 100,
+    callback: Callable[[np.ndarray], object] | None = None,
+) -> Refinement:
     """Refine ``x0`` locally: minimize the non-task terms subject to the task residuals being zero.
 
     Args:
@@ -178,6 +198,7 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         x0: starting configuration ``(n,)`` inside the search box.
         tolerance: task error [m or unitless] below which the Gauss-Newton polish stops.
         max_iterations: SLSQP iteration limit.
+        callback: ``callback(x)`` after every SLSQP / L-BFGS-B iteration (recordings trace the terms with it).
     """
     robot = problem.robot
     lower, upper = robot.lower, robot.upper
@@ -190,21 +211,22 @@ def refine(problem: Problem, x0: np.ndarray, *, tolerance: float = 1e-12, max_it
         candidates.append((x, "levenberg-marquardt"))
     elif residuals.task:
         # Task terms as constraints, the rest minimized: exact when the weights make the task a priority ...
-        candidates += _constrained(problem, residuals, x0, tolerance, max_iterations)
+        candidates += _constrained(problem, residuals, x0, tolerance, max_iterations, callback)
     if regularized and not _reaching_is_optimal(problem, residuals, candidates[-1][0], tolerance):
         # ... else the whole objective minimized as it stands: reaching costs more than it gains ...
         lbfgs = scipy_minimize(
-            _weighted(problem, residuals, "all"),
+            residuals.weighted("all"),
             x0,
             jac=True,
             method="L-BFGS-B",
             bounds=list(zip(lower, upper)),
             options={"maxiter": max_iterations},
+            callback=callback,
         )
         x = np.clip(lbfgs.x, lower, upper)
         candidates.append((x, "l-bfgs-b"))
         if residuals.task:  # ... or the constrained solve failed from x0 but succeeds from closer in
-            candidates += [(c, f"l-bfgs-b+{m}") for c, m in _constrained(problem, residuals, x, tolerance, max_iterations)]
+            candidates += [(c, f"l-bfgs-b+{m}") for c, m in _constrained(problem, residuals, x, tolerance, max_iterations, callback)]
     X = np.array([c[0] for c in candidates])
     evaluation = problem.evaluate(X)
     best = int(np.argmin(evaluation.cost))

@@ -129,7 +129,7 @@ def test_run_record_writes_what_the_table_shows(tmp_path, capsys):
     row = next(line for line in out.splitlines() if "task error" in line)
     printed = [float(cell) for cell in row.split("│")[2:4]]
     np.testing.assert_allclose(errors, printed, rtol=0.01, atol=1e-15)  # the table prints 3 digits
-    # every solver iteration of the global phase traced the terms (term logger wired to solve's callback)
+    # every iteration (global phase, refinement) traced the terms (term logger wired to solve's callback)
     iterations, _ = recording.scalars("/solutions/target_1/terms/e_t1", "iteration")
     assert len(iterations) > 5
     assert main(["replay", str(path), "--summary"]) == EXIT_OK

@@ -194,3 +194,36 @@ def test_value_gradients_match_finite_differences(robot, rng):
             E = np.eye(robot.n) * h
             fd = (problem.values(x + E)[:, 0] - problem.values(x - E)[:, 0]) / (2 * h)
             np.testing.assert_allclose(g, fd, atol=1e-6, err_msg=term.name)
+
+
+def test_linearization_is_the_population_value_and_the_residual_view(robot, rng):
+    """One kinematics call gives value, gradient, residual and Jacobian: each equal to its separate computation."""
+    prev = robot.middle
+    terms = [
+        Position("arm1_ee", [0.5, -0.2, 0.45]),
+        RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
+        Orientation("arm2_ee", Rotation.random(random_state=3).as_matrix()),
+        Motion("arm2", prev),
+        Motion("base", prev, norm="l1"),
+        JointLimitPenalty(lower=robot.lower + 0.5, upper=robot.upper - 0.5),
+    ]
+    for x in robot.random_configurations(rng, 3):
+        local = LocalKinematics(robot, x)
+        for term in terms:
+            lin = term.linearize(robot, x, local)
+            assert lin.value == pytest.approx(Problem(robot, term).values(x)[0, 0], rel=1e-12, abs=1e-14), term.name
+            if isinstance(term, JointLimitPenalty):
+                assert lin.residual is None and lin.jacobian is None
+                continue
+            np.testing.assert_allclose(lin.residual, term.residual(robot, x, local), atol=1e-15, err_msg=term.name)
+            np.testing.assert_allclose(lin.jacobian, term.jacobian(robot, x, local), atol=1e-15, err_msg=term.name)
+
+
+def test_problem_previous_is_where_the_motion_terms_measure_from(robot, rng):
+    q_prev = robot.random_configurations(rng, 1)[0]
+    problem = Problem(robot, Position("arm1_ee", [0.5, 0, 0.4]) + Motion("arm1", q_prev) + Motion("base", q_prev))
+    expected = robot.middle.copy()
+    for group in ("arm1", "base"):
+        expected[robot.group(group)] = q_prev[robot.group(group)]
+    np.testing.assert_array_equal(problem.previous, expected)
+    assert Problem(robot, Position("arm1_ee", [0.5, 0, 0.4])).previous is None

@@ -30,6 +30,8 @@ def problem() -> Problem:
 
 @pytest.mark.parametrize("solver", ["cmaes", "de", "sde", "hybrid"])
 def test_same_seed_same_result(problem, solver):
+    if solver == "hybrid":  # from the motion terms' q_prev every seed refines to the same optimum: start uniformly
+        problem = Problem(problem.robot, problem.objective.terms[0][1])
     a = solve(problem, solver, seed=5, max_iterations=40)
     b = solve(problem, solver, seed=5, max_iterations=40)
     np.testing.assert_array_equal(a.configuration, b.configuration)
@@ -143,3 +145,29 @@ def test_callback_sees_every_iteration_and_can_stop(problem):
     assert result.iterations == len(seen) <= 11
     assert result.stop_reason == "callback"
     np.testing.assert_allclose([f for _, f in seen], result.history[: len(seen)])
+
+
+def test_hybrid_starts_from_q_prev_and_escalates_when_that_basin_misses():
+    """Refinement straight from the motion terms' q_prev; if it misses the task, the full 30-generation phase
+    from a uniform start runs too and the better result by the objective is kept."""
+    from framework.costs import LocalKinematics, Orientation
+
+    robot = fw.load_robot("youbot_arm")
+    ee = robot.end_effectors[0]
+    rng = np.random.default_rng(0)
+    escalated = rescued = 0
+    for i in range(10):
+        goal, q_prev = robot.random_configurations(rng, 2)
+        pose = LocalKinematics(robot, goal).placement(ee)
+        problem = Problem(robot, Position(ee, pose.translation) + 0.5 * Orientation(ee, pose.rotation) + 0.01 * Motion("all", q_prev))
+        auto = solve(problem, "hybrid", seed=i, tolerance=1e-9)
+        warm = solve(problem, "hybrid", seed=i, tolerance=1e-9, options={"global_iterations": 0})
+        assert auto.settings["start"] == "previous" and auto.settings["global_iterations"] == 0
+        if warm.success:
+            assert not auto.settings["escalated"]
+            np.testing.assert_array_equal(auto.configuration, warm.configuration)
+        else:
+            assert auto.settings["escalated"] and auto.cost <= warm.cost
+            escalated += 1
+            rescued += auto.success
+    assert escalated >= 1 and rescued >= 1

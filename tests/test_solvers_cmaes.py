@@ -65,3 +65,30 @@ def test_cmaes_warm_start_injects_the_initial_points():
 
         minimize(cost, BOX, solver=solver, rng=np.random.default_rng(0), max_iterations=1, initial=initial)
         np.testing.assert_array_equal(seen[0][:2], initial)
+
+
+def test_cmaes_fast_starts_from_a_given_covariance_and_hands_its_shape_on():
+    """A covariance adapted on one problem (the state of a run) speeds up a run on the same ill-conditioned one."""
+    first = minimize(ellipsoid, BOX, solver="cmaes_fast", rng=np.random.default_rng(0), max_iterations=400)
+    C = first.state["covariance"]
+    np.testing.assert_allclose(C, C.T)
+    assert np.linalg.eigvalsh(C)[-1] == pytest.approx(1.0) and np.linalg.eigvalsh(C)[0] > 0
+    assert first.settings["covariance"] is None
+    start = SHIFT + 0.01
+    runs = {
+        name: minimize(ellipsoid, BOX, solver="cmaes_fast", rng=np.random.default_rng(1), max_iterations=1500,
+                       f_target=F_TARGET, initial=start, options={"sigma0": 0.01, "covariance": cov})
+        for name, cov in (("given", C), ("identity", None))
+    }
+    assert runs["given"].settings["covariance"] == "given"
+    assert runs["given"].stop_reason == runs["identity"].stop_reason == "f_target"
+    assert runs["given"].iterations < 0.5 * runs["identity"].iterations
+
+
+@pytest.mark.parametrize("covariance", [np.eye(N - 1), np.triu(np.ones((N, N))), -np.eye(N), np.full((N, N), np.nan)])
+def test_cmaes_fast_rejects_a_bad_covariance(covariance):
+    from framework.errors import SolverError
+
+    with pytest.raises(SolverError, match="covariance"):
+        minimize(sphere, BOX, solver="cmaes_fast", rng=np.random.default_rng(0), max_iterations=2,
+                 options={"covariance": covariance})

@@ -1,6 +1,6 @@
 """Cost terms (the task layer): each maps a population ``(pop, n)`` to ``(pop,)``; they compose with weights."""
 
-from .base import LocalKinematics, Objective, Term
+from .base import Linearization, LocalKinematics, Objective, Term
 from .limits import JointLimitPenalty
 from .motion import Motion
 from .orientation import Orientation, quaternion_error
@@ -9,6 +9,7 @@ from .relative import RelativePosition
 
 __all__ = [
     "JointLimitPenalty",
+    "Linearization",
     "LocalKinematics",
     "Motion",
     "Objective",

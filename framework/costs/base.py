@@ -61,10 +61,18 @@ class Term:
         raise NotImplementedError(f"{type(self).__name__} has no residual view")
 
     def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        """``d value / dx`` ``(n,)`` for terms whose value is ``‖r(x)‖`` (0 where ``r = 0``)."""
+        """``d value / dx`` ``(n,)`` at one configuration."""
+        return self.linearize(robot, x, local).gradient
+
+    def linearize(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> Linearization:
+        """Value, gradient, residual and Jacobian at one configuration ``x`` ``(n,)``, from one kinematics call.
+
+        The default is for terms whose value is ``‖r(x)‖`` (gradient ``Jᵀr/‖r‖``, 0 where ``r = 0``).
+        """
         r = self.residual(robot, x, local)
-        norm = np.linalg.norm(r)
-        return self.jacobian(robot, x, local).T @ r / norm if norm > 0 else np.zeros_like(x)
+        J = self.jacobian(robot, x, local)
+        norm = float(np.sqrt(r @ r))
+        return Linearization(norm, J.T @ r / norm if norm > 0 else np.zeros_like(x), r, J)
 
     # Composition
     def __mul__(self, weight: float) -> Objective:
@@ -79,6 +87,17 @@ class Term:
         if other == 0:  # sum([...]) starts from 0
             return Objective(((1.0, self),))
         return NotImplemented
+
+
+@dataclass(frozen=True)
+class Linearization:
+    """A term at one configuration: its value, gradient ``(n,)`` and, for terms with a residual view, the
+    residual ``(m,)`` and its Jacobian ``(m, n)`` (``None`` otherwise, e.g. the joint-limit penalty)."""
+
+    value: float
+    gradient: np.ndarray
+    residual: np.ndarray | None = None
+    jacobian: np.ndarray | None = None
 
 
 def check_weight(weight: float) -> float:

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot, check_bounds
-from .base import Term
+from .base import Linearization, Term
 
 
 class JointLimitPenalty(Term):
@@ -40,9 +40,11 @@ class JointLimitPenalty(Term):
     def validate(self, robot: Robot) -> None:
         check_bounds(*self.limits(robot), robot.coordinate_names)
 
-    def gradient(self, robot: Robot, x: np.ndarray, local) -> np.ndarray:
+    def linearize(self, robot: Robot, x: np.ndarray, local) -> Linearization:
         lower, upper = self.limits(robot)
-        return self.weight * ((x > upper).astype(float) - (x < lower).astype(float))
+        violation = np.maximum(0.0, lower - x) + np.maximum(0.0, x - upper)
+        gradient = self.weight * ((x > upper).astype(float) - (x < lower).astype(float))
+        return Linearization(self.weight * float(violation.sum()), gradient)
 
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
         lower, upper = self.limits(robot)

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term, row_norms
+from .base import Linearization, LocalKinematics, Term, row_norms
 
 NORMS = ("l2", "l1")
 
@@ -30,6 +30,7 @@ class Motion(Term):
         if self.previous.ndim != 1 or not np.all(np.isfinite(self.previous)):
             raise TaskError(f"previous configuration of group {group!r} must be a finite vector")
         self.name = name or f"motion[{group}]"
+        self._local: tuple | None = None  # (robot, indices, previous values, Jacobian) of the last linearization
 
     def indices(self, robot: Robot) -> np.ndarray:
         return robot.group(self.group)
@@ -69,12 +70,20 @@ class Motion(Term):
         """``x_g − x_g^prev`` (its L2 norm is the ``"l2"`` value)."""
         return x[self.indices(robot)] - self.previous_values(robot)
 
-    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
+    def linearize(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> Linearization:
+        if self._local is None or self._local[0] is not robot:  # group lookups once per robot
+            self._local = (robot, self.indices(robot), self.previous_values(robot), self.jacobian(robot, x, local))
+        _, idx, previous, J = self._local
+        r = x[idx] - previous
+        g = np.zeros_like(x)
         if self.norm == "l2":
-            return super().gradient(robot, x, local)
-        idx, g = self.indices(robot), np.zeros_like(x)
-        g[idx] = np.sign(x[idx] - self.previous_values(robot)) / (len(idx) * np.pi)
-        return g
+            norm = float(np.sqrt(r @ r))
+            if norm > 0:
+                g[idx] = r / norm
+            return Linearization(norm, g, r, J)
+        scale = 1.0 / (len(idx) * np.pi)
+        g[idx] = np.sign(r) * scale
+        return Linearization(float(np.abs(r).sum() * scale), g, r, J)
 
     def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         J = np.zeros((len(self.indices(robot)), robot.n))

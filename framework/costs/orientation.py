@@ -14,7 +14,7 @@ import pinocchio as pin
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term
+from .base import Linearization, LocalKinematics, Term
 
 
 def rotation_from(target: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
@@ -76,13 +76,15 @@ class Orientation(Term):
         """``log(R_targetᵀ R)`` (3,) [rad]: zero exactly when the value is zero, smooth for refinement."""
         return pin.log3(self.target.T @ local.placement(self.frame).rotation)
 
-    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        """Of the value ``sin(φ/2)``, ``φ = ‖log(R_targetᵀ R)‖``."""
-        r = self.residual(robot, x, local)
-        phi = np.linalg.norm(r)
-        if phi == 0:
-            return np.zeros_like(x)
-        return 0.5 * np.cos(phi / 2) * (self.jacobian(robot, x, local).T @ r) / phi
+    def linearize(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> Linearization:
+        """Value ``sin(φ/2)`` with ``φ = ‖log(R_targetᵀ R)‖``, its gradient, the log residual and Jacobian."""
+        R = local.placement(self.frame).rotation
+        E = self.target.T @ R
+        r = pin.log3(E)
+        J = pin.Jlog3(E) @ R.T @ local.frame_jacobian(self.frame)[3:]
+        phi = float(np.sqrt(r @ r))
+        gradient = 0.5 * np.cos(phi / 2) * (J.T @ r) / phi if phi > 0 else np.zeros_like(x)
+        return Linearization(float(np.sin(phi / 2)), gradient, r, J)
 
     def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
         R = local.placement(self.frame).rotation

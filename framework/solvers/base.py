@@ -133,6 +133,7 @@ class OptimizeResult:
         wall_time: Seconds spent in :func:`minimize`.
         solver: Registered solver name.
         settings: Every setting actually used (loop settings and algorithm parameters).
+        state: What a following run on a similar problem may start from (see :attr:`Algorithm.state`).
     """
 
     x: np.ndarray
@@ -144,6 +145,7 @@ class OptimizeResult:
     wall_time: float
     solver: str
     settings: dict[str, Any] = field(default_factory=dict)
+    state: dict[str, Any] = field(default_factory=dict, repr=False)
 
 
 class Algorithm(ABC):
@@ -221,6 +223,12 @@ class Algorithm(ABC):
     def settings(self) -> dict[str, Any]:
         """The parameters in use."""
         return dict(self.options)
+
+    @property
+    def state(self) -> dict[str, Any]:
+        """What a following run on a similar problem may start from, as options of the same solver (e.g. the
+        adapted covariance of CMA-ES, for the next waypoint of a trajectory); empty for most solvers."""
+        return {}
 
     @abstractmethod
     def ask(self) -> np.ndarray:
@@ -425,4 +433,5 @@ def minimize(
         wall_time=time.perf_counter() - start,
         solver=solver,
         settings=settings,
+        state=algorithm.state,
     )

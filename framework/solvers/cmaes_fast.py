@@ -19,10 +19,12 @@ Evaluations: ``population`` per generation.
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar
 
 import numpy as np
 
+from framework.errors import SolverError
 from framework.solvers.base import Algorithm
 from framework.solvers.cmaes import start_point_and_step
 from framework.solvers.registry import register
@@ -37,9 +39,12 @@ class CMAESFast(Algorithm):
 
     Options:
         sigma0: Initial step size; ``None`` = 0.3 * mean box width.
+        covariance: Initial covariance matrix ``(n, n)`` (symmetric positive definite; ``None`` = identity),
+            e.g. the :attr:`state` of a run on the previous waypoint: its adapted shape, scaled to a largest
+            eigenvalue of 1, so that ``sigma0`` is the step along the widest axis.
     """
 
-    DEFAULTS: ClassVar[dict[str, Any]] = {"sigma0": None}
+    DEFAULTS: ClassVar[dict[str, Any]] = {"sigma0": None, "covariance": None}
     MIN_POPULATION: ClassVar[int] = 2
 
     def setup(self) -> None:
@@ -65,12 +70,23 @@ class CMAESFast(Algorithm):
         self.B = np.eye(n)
         self.D = np.ones(n)
         self._eigen_generation = 0
+        if self.options["covariance"] is not None:
+            self.C = _check_covariance(self.options["covariance"], n)
+            self._update_eigensystem()
         self._asked = np.empty((0, n))
         self._max_sigma = 1e3 * float(np.max(self.box.width))
 
     @property
     def settings(self) -> dict[str, Any]:
-        return {"sigma0": self.sigma0, "mu": self.weights.size, "mueff": self.mueff}
+        given = self.options["covariance"] is not None
+        return {"sigma0": self.sigma0, "covariance": "given" if given else None, "mu": self.weights.size,
+                "mueff": self.mueff}
+
+    @property
+    def state(self) -> dict[str, Any]:
+        """``{"covariance": C / λ_max(C)}``: the adapted shape of the search distribution."""
+        C = 0.5 * (self.C + self.C.T)
+        return {"covariance": C / float(np.linalg.eigvalsh(C)[-1])}
 
     def ask(self) -> np.ndarray:
         """``lambda`` samples ``m + sigma B D z``, shape ``(lambda, n)``."""
@@ -87,34 +103,33 @@ class CMAESFast(Algorithm):
         return (y @ self.B / self.D) @ self.B.T
 
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
-        n, mu, w = self.n, self.weights.size, self.weights
-        y = (X - self.mean) / self.sigma
-        foreign = np.any(X != self._asked, axis=1) if self._asked.shape == X.shape else np.ones(len(X), bool)
+        # Scalars as Python floats and in-place updates: at lambda = 30 in 13-D, numpy call overhead is the cost.
+        n, w = self.n, self.weights
+        cs, cc, c1, cmu, mueff = self.cs, self.cc, self.c1, self.cmu, self.mueff
+        y = (X - self.mean) * (1.0 / self.sigma)
+        foreign = (X != self._asked).any(axis=1) if self._asked.shape == X.shape else np.ones(len(X), bool)
         if foreign.any():  # repaired or injected points: clip the Mahalanobis length like pycma
-            length = np.linalg.norm(self._inv_sqrt_C(y[foreign]), axis=1)
+            length = np.sqrt(np.square(self._inv_sqrt_C(y[foreign])).sum(axis=1))
             y[foreign] *= np.minimum(1.0, self.max_step / np.maximum(length, 1e-300))[:, None]
-        order = np.argsort(F, kind="stable")[:mu]
-        y_sel = y[order]
+        y_sel = y[np.argsort(F, kind="stable")[: w.size]]
         y_w = w @ y_sel
         self.mean = self.mean + self.sigma * y_w
 
-        self.ps = (1 - self.cs) * self.ps + np.sqrt(self.cs * (2 - self.cs) * self.mueff) * self._inv_sqrt_C(
-            y_w
-        )
+        self.ps *= 1 - cs
+        self.ps += math.sqrt(cs * (2 - cs) * mueff) * self._inv_sqrt_C(y_w)
         g = self.generation + 1
-        ps_norm = np.linalg.norm(self.ps)
-        hsig = ps_norm / np.sqrt(1 - (1 - self.cs) ** (2 * g)) / self.chi_n < 1.4 + 2 / (n + 1)
-        self.pc = (1 - self.cc) * self.pc + hsig * np.sqrt(self.cc * (2 - self.cc) * self.mueff) * y_w
-        rank_mu = (y_sel.T * w) @ y_sel
-        self.C = (
-            (1 - self.c1 - self.cmu) * self.C
-            + self.c1 * (np.outer(self.pc, self.pc) + (1 - hsig) * self.cc * (2 - self.cc) * self.C)
-            + self.cmu * rank_mu
-        )
-        self.sigma *= np.exp((self.cs / self.damps) * (ps_norm / self.chi_n - 1))
-        self.sigma = float(np.clip(self.sigma, 1e-300, self._max_sigma))
+        ps_norm = math.sqrt(float(self.ps @ self.ps))
+        hsig = ps_norm / math.sqrt(1 - (1 - cs) ** (2 * g)) / self.chi_n < 1.4 + 2 / (n + 1)
+        self.pc *= 1 - cc
+        if hsig:
+            self.pc += math.sqrt(cc * (2 - cc) * mueff) * y_w
+        self.C *= 1 - c1 - cmu + (0.0 if hsig else c1 * cc * (2 - cc))
+        self.C += c1 * (self.pc[:, None] * self.pc)
+        self.C += cmu * ((y_sel.T * w) @ y_sel)
+        sigma = self.sigma * math.exp((cs / self.damps) * (ps_norm / self.chi_n - 1))
+        self.sigma = min(max(sigma, 1e-300), self._max_sigma)
         self.generation = g
-        if g - self._eigen_generation > self.population / (self.c1 + self.cmu) / n / 10:
+        if g - self._eigen_generation > self.population / (c1 + cmu) / n / 10:
             self._update_eigensystem()
 
     def _update_eigensystem(self) -> None:
@@ -127,3 +142,15 @@ class CMAESFast(Algorithm):
             self.C += (top / MAX_CONDITION - min(float(eigvals[0]), 0.0)) * np.eye(self.n)
             eigvals, B = np.linalg.eigh(self.C)
         self.B, self.D = B, np.sqrt(np.maximum(eigvals, 1e-300))
+
+
+def _check_covariance(C: Any, n: int) -> np.ndarray:
+    """A copy of ``C`` as a symmetric positive-definite ``(n, n)`` matrix; raises :class:`SolverError`."""
+    C = np.array(C, dtype=float)
+    if C.shape != (n, n) or not np.all(np.isfinite(C)):
+        raise SolverError(f"cmaes_fast: covariance must be a finite ({n}, {n}) matrix, got shape {C.shape}.")
+    if not np.allclose(C, C.T, rtol=1e-10, atol=1e-14 * np.abs(C).max()):
+        raise SolverError("cmaes_fast: covariance must be symmetric.")
+    if np.linalg.eigvalsh(C)[0] <= 0:
+        raise SolverError("cmaes_fast: covariance must be positive definite.")
+    return 0.5 * (C + C.T)
