@@ -98,6 +98,25 @@ def test_cmaes_continues_the_previous_waypoints_distribution(mobile_dual):
     }
     continued, fresh = (runs[n].position_error[1:].mean() for n in ("continued", "fresh"))
     assert continued < 1e-9 and continued < 0.1 * fresh
+    # the first point (from the paper's q_prev, off the path) searches along the task's null space first
+    assert runs["continued"].position_error[0] < 1e-8 < runs["fresh"].position_error[0]
+
+
+def test_task_covariance_is_wide_along_the_null_space_and_narrow_across_the_task(mobile_dual):
+    from framework.costs import LocalKinematics
+    from framework.tracking import task_covariance
+
+    problem = Problem(mobile_dual, TrackingTask(**PAPER000).objective(mobile_dual, 0, [0.5, -0.25, 0.4], None, Q_PREV))
+    x = predictor(problem, Q_PREV)
+    C = task_covariance(problem, x, ratio=1e-4)
+    local = LocalKinematics(mobile_dual, x)
+    J = np.vstack([t.jacobian(mobile_dual, x, local) for _, t in problem.objective if t.is_task])
+    _, s, Vt = np.linalg.svd(J)
+    rank = int(np.sum(s > 1e-10 * s[0]))
+    row, null = Vt[:rank], Vt[rank:]
+    np.testing.assert_allclose(np.diag(null @ C @ null.T), 1.0, atol=1e-9)
+    np.testing.assert_allclose(np.diag(row @ C @ row.T), 1e-4, atol=1e-9)
+    assert task_covariance(problem, Q_PREV) is None  # not on the task: no such covariance
 
 
 def test_warm_start_cuts_evaluations(arm):
