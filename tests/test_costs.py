@@ -176,16 +176,21 @@ def test_wrong_population_shape_in_cost(robot):
         problem.cost(np.full((4, 13), np.nan))
 
 
-def test_value_gradients_match_finite_differences(robot, rng):
-    """The gradients the refinement uses (L-BFGS-B on the whole objective) against the population values."""
+def smooth_terms(robot, rotation_seed: int) -> list:
+    """One term of every kind with a gradient: task terms, L2 and L1 motion."""
     prev = robot.middle
-    terms = [
+    return [
         Position("arm1_ee", [0.5, -0.2, 0.45]),
         RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
-        Orientation("arm2_ee", Rotation.random(random_state=2).as_matrix()),
+        Orientation("arm2_ee", Rotation.random(random_state=rotation_seed).as_matrix()),
         Motion("arm2", prev),
         Motion("base", prev, norm="l1"),
     ]
+
+
+def test_value_gradients_match_finite_differences(robot, rng):
+    """The gradients the refinement uses (L-BFGS-B on the whole objective) against the population values."""
+    terms = smooth_terms(robot, 2)
     h = 1e-7
     for x in robot.random_configurations(rng, 3):
         for term in terms:
@@ -198,15 +203,7 @@ def test_value_gradients_match_finite_differences(robot, rng):
 
 def test_linearization_is_the_population_value_and_the_residual_view(robot, rng):
     """One kinematics call gives value, gradient, residual and Jacobian: each equal to its separate computation."""
-    prev = robot.middle
-    terms = [
-        Position("arm1_ee", [0.5, -0.2, 0.45]),
-        RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
-        Orientation("arm2_ee", Rotation.random(random_state=3).as_matrix()),
-        Motion("arm2", prev),
-        Motion("base", prev, norm="l1"),
-        JointLimitPenalty(lower=robot.lower + 0.5, upper=robot.upper - 0.5),
-    ]
+    terms = smooth_terms(robot, 3) + [JointLimitPenalty(lower=robot.lower + 0.5, upper=robot.upper - 0.5)]
     for x in robot.random_configurations(rng, 3):
         local = LocalKinematics(robot, x)
         for term in terms:
