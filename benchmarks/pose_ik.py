@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import framework as fw
-from framework.costs import LocalKinematics, Orientation, Position
+from framework.costs import Orientation, Position, stacked_residuals
 from framework.problem import Problem
 from framework.solve import solve
 
@@ -56,11 +56,9 @@ def dls(problem: Problem, x0: np.ndarray, rng: np.random.Generator, damping: flo
     x = x0.copy()
     steps = 0
     while time.perf_counter() - start < BUDGET:
-        local = LocalKinematics(robot, x)
-        r = np.concatenate([t.residual(robot, x, local) for t in terms])
         if problem.evaluate(x).task_error[0] <= TOLERANCE:
             return True, time.perf_counter() - start
-        J = np.vstack([t.jacobian(robot, x, local) for t in terms])
+        r, J = stacked_residuals(robot, terms, x)
         x = np.clip(x - J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(len(r)), r), robot.lower, robot.upper)
         steps += 1
         if steps % 100 == 0:  # stuck: restart from a random configuration

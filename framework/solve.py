@@ -12,7 +12,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -146,9 +146,9 @@ def solve(
     stop = run.stop_reason
     if stop == "callback" and stop_at_tolerance and problem.evaluate(run.x).task_error[0] <= tolerance:
         stop = "tolerance"
-    result = _result(problem, run.x, stop, run.iterations, run.evaluations, start, run.history, solver,
-                     {**run.settings, "population": population, "max_iterations": max_iterations}, tolerance)
-    return replace(result, state=run.state)
+    return _result(problem, run.x, stop, run.iterations, run.evaluations, start, run.history, solver,
+                   {**run.settings, "population": population, "max_iterations": max_iterations}, tolerance,
+                   run.state)
 
 
 def _hybrid(problem, rng, population, tolerance, initial, options, start, callback=None) -> IKResult:
@@ -157,8 +157,9 @@ def _hybrid(problem, rng, population, tolerance, initial, options, start, callba
         raise SolverError(f"unknown hybrid option(s) {sorted(unknown)}; known: {sorted(HYBRID_DEFAULTS)}")
     settings = {**HYBRID_DEFAULTS, **options}
     robot = problem.robot
-    if initial is None and settings["warm_start"] and problem.previous is not None:
-        initial, settings["start"] = problem.previous[None], "previous"  # where the motion terms measure from
+    previous = problem.previous if initial is None and settings["warm_start"] else None
+    if previous is not None:
+        initial, settings["start"] = previous[None], "previous"  # where the motion terms measure from
     else:
         settings["start"] = "initial" if initial is not None else "uniform"
     escalate = settings["global_iterations"] is None and initial is not None
@@ -219,7 +220,9 @@ def _multistart(problem, rng, population, max_iterations, tolerance, initial, op
                    "multistart_lm", settings, tolerance)
 
 
-def _result(problem, x, stop, iterations, evaluations, start, history, solver, settings, tolerance) -> IKResult:
+def _result(
+    problem, x, stop, iterations, evaluations, start, history, solver, settings, tolerance, state=None
+) -> IKResult:
     evaluation = problem.evaluate(x)
     task_error = float(evaluation.task_error[0])
     return IKResult(
@@ -235,4 +238,5 @@ def _result(problem, x, stop, iterations, evaluations, start, history, solver, s
         history=np.asarray(history, dtype=float),
         solver=solver,
         settings=settings,
+        state=state or {},
     )

@@ -29,12 +29,12 @@ import numpy as np
 
 from .costs import (
     JointLimitPenalty,
-    LocalKinematics,
     Motion,
     Objective,
     Orientation,
     Position,
     RelativePosition,
+    stacked_residuals,
 )
 from .costs.base import check_weight
 from .errors import TaskError
@@ -569,9 +569,8 @@ def task_covariance(problem: Problem, x: np.ndarray, *, ratio: float = TASK_SPAC
     task = [t for _, t in problem.objective if t.is_task]
     if not task or problem.evaluate(x).task_error[0] > 1e-9:
         return None
-    local = LocalKinematics(robot, x)
     try:
-        J = np.vstack([t.jacobian(robot, x, local) for t in task])
+        _, J = stacked_residuals(robot, task, x)
     except NotImplementedError:
         return None
     row = np.linalg.pinv(J, rcond=1e-10) @ J  # projector onto the row space
@@ -598,14 +597,8 @@ def predictor(problem: Problem, x: np.ndarray, *, steps: int = 5, damping: float
     w = np.maximum(w, 1e-3 * max(float(w.max()), 1.0)) if w.any() else np.ones(robot.n)
     inv_w = 1.0 / w
 
-    def residual(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        local = LocalKinematics(robot, y)
-        r = np.concatenate([t.residual(robot, y, local) for t in task])
-        J = np.vstack([t.jacobian(robot, y, local) for t in task])
-        return r, J
-
     try:
-        r, J = residual(x)
+        r, J = stacked_residuals(robot, task, x)
     except NotImplementedError:
         return x.copy()
     for _ in range(steps):
@@ -619,7 +612,7 @@ def predictor(problem: Problem, x: np.ndarray, *, steps: int = 5, damping: float
         except np.linalg.LinAlgError:
             break
         y = np.clip(x + dx, robot.lower, robot.upper)
-        r_new, J_new = residual(y)
+        r_new, J_new = stacked_residuals(robot, task, y)
         if not np.linalg.norm(r_new) < np.linalg.norm(r):
             break
         x, r, J = y, r_new, J_new

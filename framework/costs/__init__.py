@@ -1,6 +1,6 @@
 """Cost terms (the task layer): each maps a population ``(pop, n)`` to ``(pop,)``; they compose with weights."""
 
-from .base import Linearization, LocalKinematics, Objective, Term
+from .base import Linearization, LocalKinematics, Objective, Term, stacked_residuals
 from .limits import JointLimitPenalty
 from .motion import Motion
 from .orientation import Orientation, quaternion_error
@@ -18,4 +18,5 @@ __all__ = [
     "RelativePosition",
     "Term",
     "quaternion_error",
+    "stacked_residuals",
 ]

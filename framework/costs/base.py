@@ -176,6 +176,18 @@ class LocalKinematics:
         return J if self._T is None else J @ self._T
 
 
+def stacked_residuals(
+    robot: Robot, terms: Sequence[Term], x: np.ndarray, local: LocalKinematics | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Residuals ``(m,)`` and Jacobians ``(m, n)`` of ``terms`` at ``x``, stacked, from one kinematics call.
+
+    Raises NotImplementedError for a term without a residual view.
+    """
+    local = LocalKinematics(robot, x) if local is None else local
+    r = np.concatenate([t.residual(robot, x, local) for t in terms])
+    return r, np.vstack([t.jacobian(robot, x, local) for t in terms])
+
+
 def row_norms(D: np.ndarray) -> np.ndarray:
     """Euclidean norm of each row of ``D`` ``(pop, m)``: shape ``(pop,)``."""
     return np.sqrt(np.einsum("ij,ij->i", D, D))

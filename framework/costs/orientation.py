@@ -87,5 +87,4 @@ class Orientation(Term):
         return Linearization(float(np.sin(phi / 2)), gradient, r, J)
 
     def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        R = local.placement(self.frame).rotation
-        return pin.Jlog3(self.target.T @ R) @ R.T @ local.frame_jacobian(self.frame)[3:]
+        return self.linearize(robot, x, local).jacobian
