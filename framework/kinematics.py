@@ -10,12 +10,14 @@ idle cores and lost 50x when the cores were shared with other processes (benchma
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
 import numba
 import numpy as np
 
 from .errors import ConfigurationError, UnknownFrameError
+from .native import borrow, keep_alive
 from .robot import JointKind
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -95,6 +97,29 @@ class PopulationKinematics:
         ).reshape(-1, 12)
         self.frames = frames
 
+    @property
+    def tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The kernel's tables ``(joint ints, joint geometry, frame slots, frame geometry)`` (read-only use)."""
+        return self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo
+
+    @cached_property
+    def chains(self) -> tuple[np.ndarray, np.ndarray]:
+        """Coordinates moving each frame, ascending (an ancestor's before its descendants'): CSR ``(ptr, idx)``.
+
+        Frame ``f`` moves with coordinates ``idx[ptr[f]:ptr[f + 1]]``; in that order, a coordinate's joint is an
+        ancestor of (or the same joint as) every later one's, which the second-order terms of the engine use.
+        """
+        ptr, idx = [0], []
+        for slot in self._frame_slot:
+            coordinates, j = [], int(slot)
+            while j > 0:
+                kind, first = int(self._joint_int[j, 1]), int(self._joint_int[j, 2])
+                coordinates += range(first, first + (3 if kind == _PLANAR else 1))
+                j = int(self._joint_int[j, 0])
+            idx += sorted(coordinates)
+            ptr.append(len(idx))
+        return np.array(ptr, dtype=np.int64), np.array(idx, dtype=np.int64)
+
     def __call__(self, X: np.ndarray) -> FramePoses:
         """Poses for a population ``X`` of shape ``(pop, n)`` (float64); NaN/inf rows raise ConfigurationError."""
         pop, k = X.shape[0], len(self.frames)
@@ -113,7 +138,7 @@ class PopulationKinematics:
         """
         pop, k = X.shape[0], len(self.frames)
         out = np.empty((pop, k, 12))
-        J = np.zeros((pop, k, 6, n))
+        J = np.empty((pop, k, 6, n))
         bad = _jac_serial(X, self._joint_int, self._joint_geo, self._frame_slot, self._frame_geo, out, J)
         if bad >= 0:
             raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
@@ -195,47 +220,73 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
 @numba.njit(cache=True)
 def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
     """FK of every row of ``X``; returns the first row holding NaN/inf, or -1."""
-    W = np.empty((jint.shape[0], 12))
+    own = np.empty((jint.shape[0], 12))
+    W, X, out = borrow(own), borrow(X), borrow(out)
+    jint, jgeo, fslot, fgeo = borrow(jint), borrow(jgeo), borrow(fslot), borrow(fgeo)
+    bad = -1
     for b in range(X.shape[0]):
         if not np.all(np.isfinite(X[b])):
-            return b
+            bad = b
+            break
         _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
-    return -1
+    keep_alive(own)
+    return bad
 
 
 @numba.njit(cache=True)
 def _jac_serial(X, jint, jgeo, fslot, fgeo, out, J):
-    """FK and frame Jacobians of every row of ``X`` (``J`` zeroed by the caller); first bad row or -1."""
-    W = np.empty((jint.shape[0], 12))
+    """FK and frame Jacobians of every row of ``X``; returns the first row holding NaN/inf, or -1."""
+    own = np.empty((jint.shape[0], 12))
+    W, X, out, J = borrow(own), borrow(X), borrow(out), borrow(J)
+    jint, jgeo, fslot, fgeo = borrow(jint), borrow(jgeo), borrow(fslot), borrow(fgeo)
+    bad = -1
     for b in range(X.shape[0]):
-        x = X[b]
-        if not np.all(np.isfinite(x)):
-            return b
-        _fk_one(x, jint, jgeo, fslot, fgeo, out[b], W)
-        for f in range(fslot.shape[0]):
-            px, py, pz = out[b, f, 9], out[b, f, 10], out[b, f, 11]
-            j = fslot[f]
-            while j > 0:
-                kind, i = jint[j, 1], jint[j, 2]
-                w = W[j]
-                ux, uy, uz = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14]
-                if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
-                    c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
-                    for r in range(3):
-                        J[b, f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
-                        J[b, f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
-                    ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
-                # world axis a = R_j u (the joint's own rotation leaves u fixed)
-                ax = w[0] * ux + w[1] * uy + w[2] * uz
-                ay = w[3] * ux + w[4] * uy + w[5] * uz
-                az = w[6] * ux + w[7] * uy + w[8] * uz
-                if kind == 1:  # prismatic: translation along a
-                    J[b, f, 0, i], J[b, f, 1, i], J[b, f, 2, i] = ax, ay, az
-                else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
-                    dx, dy, dz = px - w[9], py - w[10], pz - w[11]
-                    J[b, f, 0, i] = ay * dz - az * dy
-                    J[b, f, 1, i] = az * dx - ax * dz
-                    J[b, f, 2, i] = ax * dy - ay * dx
-                    J[b, f, 3, i], J[b, f, 4, i], J[b, f, 5, i] = ax, ay, az
-                j = jint[j, 0]
-    return -1
+        if not np.all(np.isfinite(X[b])):
+            bad = b
+            break
+        fk_jacobian_one(X[b], jint, jgeo, fslot, fgeo, out[b], W, J[b])
+    keep_alive(own)
+    return bad
+
+
+@numba.njit(cache=True)
+def fk_jacobian_one(x, jint, jgeo, fslot, fgeo, out, W, J):
+    """FK of one configuration into ``out (k, 12)`` and its frame Jacobians into ``J (k, 6, n)`` (overwritten).
+
+    ``J[f, 0:3, i]``: derivative of frame ``f``'s origin [m per coordinate unit]; ``J[f, 3:6, i]``: its world
+    angular velocity per coordinate rate (zero for prismatic coordinates and planar translations).
+    """
+    _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+    frame_jacobians(x, jint, jgeo, fslot, out, W, J)
+
+
+@numba.njit(cache=True)
+def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
+    """Frame Jacobians ``J (k, 6, n)`` from the poses ``out`` and joint placements ``W`` of a FK at ``x``."""
+    J[:] = 0.0
+    for f in range(fslot.shape[0]):
+        px, py, pz = out[f, 9], out[f, 10], out[f, 11]
+        j = fslot[f]
+        while j > 0:
+            kind, i = jint[j, 1], jint[j, 2]
+            w = W[j]
+            ux, uy, uz = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14]
+            if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
+                c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+                for r in range(3):
+                    J[f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
+                    J[f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
+                ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
+            # world axis a = R_j u (the joint's own rotation leaves u fixed)
+            ax = w[0] * ux + w[1] * uy + w[2] * uz
+            ay = w[3] * ux + w[4] * uy + w[5] * uz
+            az = w[6] * ux + w[7] * uy + w[8] * uz
+            if kind == 1:  # prismatic: translation along a
+                J[f, 0, i], J[f, 1, i], J[f, 2, i] = ax, ay, az
+            else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
+                dx, dy, dz = px - w[9], py - w[10], pz - w[11]
+                J[f, 0, i] = ay * dz - az * dy
+                J[f, 1, i] = az * dx - ax * dz
+                J[f, 2, i] = ax * dy - ay * dx
+                J[f, 3, i], J[f, 4, i], J[f, 5, i] = ax, ay, az
+            j = jint[j, 0]

@@ -1,16 +1,19 @@
 """An IK problem: a robot, a weighted objective over its joint coordinates, and how to treat the box.
 
-``Problem.cost(X)`` is what solvers minimize: one population forward-kinematics call for every frame the
-terms need, then the weighted sum. ``Problem.evaluate(X)`` reports every term separately.
+``Problem.cost(X)`` is what solvers minimize: one compiled pass over the population computes the forward
+kinematics of every frame the terms read and every term's value (:class:`~framework.costs.Program`), then the
+weighted sum. ``Problem.evaluate(X)`` reports every term separately; ``Problem.errors(x)`` each task term's
+error in its own unit (m or rad), which decides success.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from .costs import JointLimitPenalty, Motion, Objective, Term
+from .costs import Objective, Program, Term
 from .errors import TaskError
 from .robot import Robot
 
@@ -52,12 +55,19 @@ class Problem:
         robot: the robot (its ``lower``/``upper`` are the search box).
         objective: weighted terms (a single :class:`Term` is accepted).
         bounds: out-of-box candidates are ``"resample"``-d uniformly (paper 000 eq. 12), ``"clip"``-ped, or
-            left to a ``"penalty"`` (a :class:`JointLimitPenalty` is appended if the objective has none).
+            left to a ``"penalty"`` (a :class:`~framework.costs.JointLimitPenalty` is appended if the objective
+            has none); the local engine always keeps its steps in the box.
+        priorities: ``True``: the task terms come first, whatever the weights (the regularizers are minimized
+            without leaving the task). ``False`` (the papers' weighted sums): the weighted sum is what counts,
+            so with small task weights the optimum may stop short of a reachable target.
+
+    Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
     """
 
     robot: Robot
     objective: Objective
     bounds: str = "resample"
+    priorities: bool = False
 
     def __post_init__(self) -> None:
         objective = self.objective
@@ -67,16 +77,19 @@ class Problem:
             raise TaskError("a problem needs an objective of at least one cost term")
         if self.bounds not in BOUNDS:
             raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")
-        if self.bounds == "penalty" and not any(isinstance(t, JointLimitPenalty) for _, t in objective):
+        if self.bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in objective):
+            from .costs import JointLimitPenalty
+
             objective = objective + JointLimitPenalty()
         for _, term in objective:
             term.validate(self.robot)
         object.__setattr__(self, "objective", objective)
-        # The hot path, prepared once: bound term evaluators, the weights, one FK program for all frames.
-        object.__setattr__(self, "_evaluators", tuple(t.bind(self.robot) for _, t in objective))
         object.__setattr__(self, "_weights", np.array([w for w, _ in objective]))
-        frames = objective.frames
-        object.__setattr__(self, "_kinematics", self.robot._kinematics(frames) if frames else None)
+
+    @cached_property
+    def program(self) -> Program:
+        """The objective packed for the compiled kernels and the local engine (built once)."""
+        return Program(self.robot, self.objective)
 
     @property
     def n(self) -> int:
@@ -90,9 +103,10 @@ class Problem:
     def weights(self) -> np.ndarray:
         return self._weights.copy()
 
-    @property
+    @cached_property
     def task_mask(self) -> np.ndarray:
-        return np.array([t.is_task for _, t in self.objective])
+        """``(k,)`` True for task terms."""
+        return np.array([t.is_task for _, t in self.objective], dtype=bool)
 
     @property
     def repair_mode(self) -> str:
@@ -101,28 +115,18 @@ class Problem:
 
     @property
     def previous(self) -> np.ndarray | None:
-        """``(n,)`` the configuration the motion terms measure from (box middle on joints no motion term covers),
-        clipped to the box; ``None`` when the objective has no motion term. The natural warm start."""
-        motions = [t for _, t in self.objective if isinstance(t, Motion)]
-        if not motions:
-            return None
+        """``(n,)`` the configuration the regularizers pull towards (e.g. motion terms' ``q_prev``; the box
+        middle on coordinates none covers), clipped to the box; ``None`` when no regularizer has one.
+        The natural warm start."""
         x = self.robot.middle.copy()
-        for term in motions:
-            x[term.indices(self.robot)] = term.previous_values(self.robot)
+        self.program.refresh()
+        if not self.program.reference(x):
+            return None
         return np.clip(x, self.robot.lower, self.robot.upper)
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, k)`` unweighted term values for a population ``X`` ``(pop, n)``."""
-        if self._kinematics is None:
-            X = self.robot.check_population(X)
-            poses = None
-        else:  # the FK kernel rejects NaN/inf itself
-            X = self.robot.check_population(X, finite=False)
-            poses = self._kinematics(X)
-        values = np.empty((X.shape[0], len(self._evaluators)))
-        for k, evaluate in enumerate(self._evaluators):
-            values[:, k] = evaluate(X, poses)
-        return values
+        return self.program.values(self.robot.check_population(X, finite=False))
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` objective values: the population cost solvers minimize."""
@@ -134,3 +138,11 @@ class Problem:
         return Evaluation(
             self.names, self.weights, values, values @ self._weights, values[:, self.task_mask].sum(axis=1)
         )
+
+    def errors(self, x: np.ndarray) -> dict[str, float]:
+        """Each task block's error at one configuration ``x`` ``(n,)``: distance [m] for position-like terms,
+        angle [rad] for orientations, by name (a pose contributes ``name.distance`` and ``name.angle``)."""
+        from .engine import task_errors
+
+        x = self.robot.check_population(x)[0]
+        return dict(zip(self.program.task_blocks, task_errors(self.program, x).tolist()))

@@ -493,7 +493,6 @@ class Recorder:
 
 def _desired_paths(robot: Robot, tracking: TrackingResult, task: Any) -> dict[str, np.ndarray]:
     """Frame -> desired positions ``(k, 3)`` along a tracked path, from the objective of every waypoint."""
-    from .costs import Position, RelativePosition
     from .tracking import TrackingTask
 
     builder = task
@@ -508,11 +507,8 @@ def _desired_paths(robot: Robot, tracking: TrackingResult, task: Any) -> dict[st
     for k, x in enumerate(Q):
         previous = tracking.initial if k == 0 else Q[k - 1]
         for _, term in builder(k, trajectory.positions[k], trajectory.rotation(k), previous):
-            if isinstance(term, Position):
-                points.setdefault(term.frame, []).append(term.target)
-            elif isinstance(term, RelativePosition):
-                anchor = robot.frame_placement(x, term.frame_a).translation
-                points.setdefault(term.frame_b, []).append(anchor + term.offset)
+            for frame, point in term.target_points(robot, x).items():
+                points.setdefault(frame, []).append(point)
     return {frame: np.array(p) for frame, p in points.items() if len(p) == len(Q)}
 
 
@@ -536,15 +532,10 @@ def _targets(robot: Robot, x: np.ndarray, problem: Problem | None, targets) -> t
         return [f"target {i + 1}" for i in range(len(points))], points
     labels, points = [], []
     if problem is not None:
-        from .costs import Position, RelativePosition
-
         for (_, term), label in zip(problem.objective, problem.names):
-            if isinstance(term, Position):
+            for point in term.target_points(robot, x).values():
                 labels.append(label)
-                points.append(term.target)
-            elif isinstance(term, RelativePosition):
-                labels.append(label)
-                points.append(robot.frame_poses(x, term.frame_a).positions[0, 0] + term.offset)
+                points.append(point)
     return labels, np.array(points, dtype=float).reshape(-1, 3)
 
 

@@ -129,6 +129,8 @@ class Robot:
     urdf: str | None = field(default=None, repr=False)
     locked: Mapping[str, float] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, repr=False)
+    #: compiled-kinematics programs and packed layouts, built on first use (not part of the robot's value)
+    _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         lower = np.asarray(self.lower, dtype=float)
@@ -321,12 +323,12 @@ class Robot:
         return self._kinematics(tuple(frames)).jacobians(self.check_population(X, finite=False), self.n)
 
     def _kinematics(self, frames: tuple[str, ...]):
-        cache = self.__dict__.setdefault("_programs", {})
-        if frames not in cache:
+        key = ("kinematics", frames)
+        if key not in self._cache:
             from .kinematics import PopulationKinematics
 
-            cache[frames] = PopulationKinematics(self, frames)
-        return cache[frames]
+            self._cache[key] = PopulationKinematics(self, frames)
+        return self._cache[key]
 
     def frame_placement(self, x: np.ndarray, frame: str) -> pin.SE3:
         """World placement of one frame at one configuration, computed by Pinocchio (reference path)."""

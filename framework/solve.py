@@ -1,15 +1,14 @@
-"""``solve(problem, solver=...)``: one IK solve with any registered metaheuristic, or the hybrid.
+"""``solve(problem, solver=...)``: the one entry point of single IK solves.
 
-The hybrid (``solver="hybrid"``) refines with :func:`framework.refine.refine` (a bounded local refinement with
-Pinocchio's analytic Jacobians that keeps minimizing the non-task terms, motion, while driving the task error to
-machine precision) straight from the warm start: ``initial``, else the configuration the motion terms measure
-from. If that misses the task, or there is no warm start, a short global phase of a metaheuristic
-(``cmaes_fast`` by default) from a uniform start picks the point to refine.
+It validates the request, looks the solver up by name (``"hybrid"`` by default: the compiled local engine from
+the warm start, a metaheuristic's global phase when that misses; ``"multistart_lm"``: the engine alone; or any
+registered metaheuristic), runs it and reports an :class:`IKResult`. Success is strict: every task term within
+its tolerance in its own unit — positions and relative positions within ``tolerance`` [m], orientations within
+``angle_tolerance`` [rad] (default: the same number).
 """
 
 from __future__ import annotations
 
-import itertools
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -19,26 +18,14 @@ import numpy as np
 
 from .errors import SolverError
 from .problem import Problem
-from .multistart import multistart_lm
-from .refine import Refinement, refine
-from .solvers import available_solvers, minimize
+from .solvers import Request, ik_solver
+from .engine import task_errors
+from .solvers.ik import positive_int
 
-#: Global-phase generations of the hybrid by default, from a warm start and from a uniform start. From the
-#: motion terms' previous configuration the refinement alone finds the optimum that 30 generations from uniform
-#: starts find (paper 000's four targets, 100 seeds: all f equal), and 10 warm generations never changed the
-#: outcome (120 random pose tasks on three arms): the warm start always stayed the best member. When the
-#: refinement from the warm start misses the task, the hybrid escalates to the cold global phase.
-WARM_GLOBAL_ITERATIONS, COLD_GLOBAL_ITERATIONS = 0, 30
-
-HYBRID_DEFAULTS: dict[str, Any] = {
-    "global_solver": "cmaes_fast",  # metaheuristic of the global phase
-    "global_iterations": None,  # its generations: None = refine from the warm start, escalating to 30
-    # generations from a uniform start if the task is missed (30 at once without a warm start); an explicit
-    # number runs that many from the warm start (or uniformly), without escalation
-    "warm_start": True,  # without `initial`, start from the configuration the motion terms measure from
-    "refine_iterations": 100,  # SLSQP / Levenberg-Marquardt iterations per refinement
-    "time_budget": None,  # seconds: restart the refinement from random configurations until success or budget
-}
+#: The solver ``solve`` uses when none is named.
+DEFAULT_SOLVER = "hybrid"
+#: Default success tolerance: 1e-6 m for positions, 1e-6 rad for orientations.
+DEFAULT_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -49,16 +36,19 @@ class IKResult:
         configuration: best joint coordinates ``(n,)`` [rad / m].
         cost: objective value at ``configuration``.
         terms: unweighted value of every term, by name.
-        task_error: sum of the unweighted task terms (position [m], orientation, relative position [m]).
-        success: ``task_error <= tolerance``.
-        stop_reason: why the solver stopped (``max_iterations``, ``tolerance``, ``stagnation``, ...).
-        iterations, evaluations: solver iterations and cost evaluations (population members; for the hybrid
-            plus one per Jacobian evaluation of the refinement).
+        task_error: sum of the unweighted task terms (position [m] + orientation ``sin(φ/2)`` + ...: the papers'
+            measure).
+        errors: each task term's error in its own unit, by name: distance [m] for positions and relative
+            positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``).
+        success: every entry of ``errors`` within its tolerance.
+        stop_reason: why the solver stopped (``tolerance``, ``max_iterations``, ``time_budget``, ``stagnation``,
+            ``local_minimum``, ``interrupted``, ...).
+        iterations, evaluations: solver iterations and cost / residual evaluations.
         wall_time: seconds.
-        history: ``(iterations,)`` best cost after each iteration.
+        history: best cost after each iteration (metaheuristics; per phase for the hybrid).
         solver: solver name; settings: every setting used.
         state: what a following solve of a similar problem may start from, as options of the same solver
-            (:attr:`framework.solvers.Algorithm.state`; e.g. CMA-ES's adapted covariance along a trajectory).
+            (e.g. CMA-ES's adapted covariance along a trajectory).
     """
 
     configuration: np.ndarray
@@ -74,16 +64,19 @@ class IKResult:
     solver: str
     settings: dict[str, Any] = field(default_factory=dict, repr=False)
     state: dict[str, Any] = field(default_factory=dict, repr=False)
+    errors: dict[str, float] = field(default_factory=dict)
 
 
 def solve(
     problem: Problem,
-    solver: str = "cmaes",
+    solver: str | None = None,
     *,
     seed: int | np.random.Generator = 0,
-    max_iterations: int = 1000,
+    tolerance: float = DEFAULT_TOLERANCE,
+    angle_tolerance: float | None = None,
+    time_budget: float | None = None,
+    max_iterations: int | None = None,
     population: int = 30,
-    tolerance: float = 1e-4,
     stop_at_tolerance: bool = False,
     initial: np.ndarray | None = None,
     options: dict[str, Any] | None = None,
@@ -94,149 +87,99 @@ def solve(
 
     Args:
         problem: robot + weighted objective + bounds handling.
-        solver: a registered metaheuristic (see :func:`framework.solvers.available_solvers`), ``"hybrid"``, or
-            ``"multistart_lm"`` (population Levenberg-Marquardt, for problems of task terms only: pose IK).
+        solver: ``"hybrid"`` (default), ``"multistart_lm"`` or a registered metaheuristic
+            (:func:`framework.solvers.solver_names`).
         seed: seed or generator; the same seed gives the same result.
-        max_iterations: iteration budget (the hybrid: of its refinement; its global phase has its own).
-        population: candidates per iteration.
-        tolerance: success threshold on the task error.
-        stop_at_tolerance: stop as soon as the best member's task error is within ``tolerance`` (the papers run
-            the whole budget; the hybrid always stops at tolerance after refinement).
+        tolerance: success threshold of every position-like task term [m].
+        angle_tolerance: success threshold of every orientation [rad] (default: ``tolerance``).
+        time_budget: seconds for the whole solve (the local engine checks it inside its loops).
+        max_iterations: iteration budget (metaheuristics: generations, default 1000; local engine:
+            Levenberg-Marquardt iterations over all restarts, default 2000).
+        population: candidates per iteration (metaheuristics; the hybrid's global phase).
+        stop_at_tolerance: metaheuristics stop as soon as the task is within tolerance (the papers run the
+            whole budget; the local engine always stops there).
         initial: warm start ``(n,)`` or ``(k, n)`` (e.g. the previous solution along a trajectory).
-        options: solver parameters (for the hybrid: ``global_solver``, ``global_iterations``,
-            ``refine_iterations``, ``time_budget`` and ``global_options``).
+        options: the solver's options (see ``metaik solvers``).
         progress: print a progress line now and then (metaheuristics).
-        callback: ``callback(iteration, best_f, best_x)`` after every iteration of a metaheuristic (for the
-            hybrid: of its global phase); returning True stops. Recordings use it to trace every term.
+        callback: ``callback(iteration, best_f, best_x)`` after every iteration (metaheuristics; phases of the
+            hybrid); returning True stops. Recordings use it to trace every term.
     """
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    if not np.isfinite(tolerance) or tolerance <= 0:
+    start = time.perf_counter()
+    deadline = None
+    if time_budget is not None:
+        if not _positive(time_budget):
+            raise SolverError(f"time_budget must be a positive number of seconds; got {time_budget!r}")
+        deadline = time.monotonic() + float(time_budget)
+    if not _positive(tolerance):
         raise SolverError(f"tolerance must be a positive number; got {tolerance!r}")
+    if angle_tolerance is not None and not _positive(angle_tolerance):
+        raise SolverError(f"angle_tolerance must be a positive number [rad]; got {angle_tolerance!r}")
+    if max_iterations is not None:
+        max_iterations = positive_int(max_iterations, "max_iterations")
+    population = positive_int(population, "population")
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
-    start = time.perf_counter()
-    if solver == "hybrid":
-        return _hybrid(problem, rng, population, tolerance, initial, dict(options or {}), start, callback)
-    if solver == "multistart_lm":
-        return _multistart(problem, rng, population, max_iterations, tolerance, initial, dict(options or {}), start)
-    if solver not in available_solvers():
-        known = ", ".join(["hybrid", "multistart_lm", *available_solvers()])
-        raise SolverError(f"unknown solver {solver!r}; available: {known}")
-
-    user_callback = callback
-    if stop_at_tolerance:
-
-        def callback(iteration: int, best_f: float, best_x: np.ndarray) -> bool:
-            stop = bool(user_callback(iteration, best_f, best_x)) if user_callback else False
-            return stop or bool(problem.evaluate(best_x).task_error[0] <= tolerance)
-
-    run = minimize(
-        problem.cost,
-        (problem.robot.lower, problem.robot.upper),
-        solver=solver,
-        rng=rng,
+    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
+    request = Request(
+        rng=_lazy_generator(seed),
+        tolerance=float(tolerance),
+        angle_tolerance=float(tolerance if angle_tolerance is None else angle_tolerance),
         max_iterations=max_iterations,
         population=population,
         initial=initial,
-        bounds=problem.repair_mode,
-        options=options,
+        deadline=deadline,
+        stop_at_tolerance=stop_at_tolerance,
         callback=callback,
         progress=progress,
     )
-    stop = run.stop_reason
-    if stop == "callback" and stop_at_tolerance and problem.evaluate(run.x).task_error[0] <= tolerance:
-        stop = "tolerance"
-    return _result(problem, run.x, stop, run.iterations, run.evaluations, start, run.history, solver,
-                   {**run.settings, "population": population, "max_iterations": max_iterations}, tolerance,
-                   run.state)
+    outcome = method.solve(problem, request)
+    return _result(problem, outcome, method.name, request, start)
 
 
-def _hybrid(problem, rng, population, tolerance, initial, options, start, callback=None) -> IKResult:
-    unknown = set(options) - set(HYBRID_DEFAULTS) - {"global_options"}
-    if unknown:
-        raise SolverError(f"unknown hybrid option(s) {sorted(unknown)}; known: {sorted(HYBRID_DEFAULTS)}")
-    settings = {**HYBRID_DEFAULTS, **options}
-    robot = problem.robot
-    previous = problem.previous if initial is None and settings["warm_start"] else None
-    if previous is not None:
-        initial, settings["start"] = previous[None], "previous"  # where the motion terms measure from
-    else:
-        settings["start"] = "initial" if initial is not None else "uniform"
-    escalate = settings["global_iterations"] is None and initial is not None
-    if settings["global_iterations"] is None:
-        settings["global_iterations"] = WARM_GLOBAL_ITERATIONS if initial is not None else COLD_GLOBAL_ITERATIONS
-    refine_tolerance = min(tolerance, 1e-12)
-
-    numbers = itertools.count(1)  # iterations reported to `callback`: global generations and refinement steps
-
-    def report(iteration: int, f: float, x: np.ndarray) -> bool:
-        return bool(callback(next(numbers), f, x))
-
-    def phase(initial: np.ndarray | None, generations: int) -> tuple[Refinement, list[float], int, int]:
-        """Global phase from ``initial`` (uniform if None), then refinement of its best."""
-        if generations > 0:
-            run = minimize(problem.cost, (robot.lower, robot.upper), solver=settings["global_solver"], rng=rng,
-                           max_iterations=generations, population=population, initial=initial,
-                           bounds=problem.repair_mode, options=settings.get("global_options"),
-                           callback=report if callback else None)
-            x0, history, iterations, evaluations = run.x, list(run.history), run.iterations, run.evaluations
-        else:
-            x0, history, iterations, evaluations = initial[0] if initial is not None else robot.middle, [], 0, 0
-        trace = (lambda x: report(0, float(problem.cost(x[None])[0]), x.copy())) if callback else None
-        best = refine(problem, x0, tolerance=refine_tolerance, max_iterations=settings["refine_iterations"],
-                      callback=trace)
-        return best, history, iterations + 1, evaluations + best.evaluations
-
-    best, history, iterations, evaluations = phase(initial, settings["global_iterations"])
-    settings["escalated"] = escalate and best.task_error > tolerance
-    if settings["escalated"]:  # the warm start's basin misses the task: the full global phase, uniform start
-        cold, more, extra, spent = phase(None, COLD_GLOBAL_ITERATIONS)
-        history, iterations, evaluations = history + more, iterations + extra, evaluations + spent
-        best = cold if cold.cost < best.cost else best
-    restarts, budget = 0, settings["time_budget"]
-    while budget is not None and best.task_error > tolerance and time.perf_counter() - start < budget:
-        restarts += 1
-        x0 = robot.random_configurations(rng, 1)[0]
-        attempt = refine(problem, x0, tolerance=refine_tolerance, max_iterations=settings["refine_iterations"])
-        evaluations += attempt.evaluations
-        if attempt.cost < best.cost:
-            best = attempt
-    history.append(best.cost)
-    stop = "tolerance" if best.task_error <= tolerance else ("time_budget" if budget else "refinement_stalled")
-    settings.update(refinement=best.method, restarts=restarts)
-    return _result(problem, best.x, stop, iterations + restarts, evaluations, start, history, "hybrid",
-                   {**settings, "population": population}, tolerance)
+def _positive(value: Any) -> bool:
+    return isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool) \
+        and bool(np.isfinite(value)) and value > 0
 
 
-def _multistart(problem, rng, population, max_iterations, tolerance, initial, options, start) -> IKResult:
-    unknown = set(options) - {"time_budget", "stall"}
-    if unknown:
-        raise SolverError(f"unknown multistart_lm option(s) {sorted(unknown)}; known: ['stall', 'time_budget']")
-    run = multistart_lm(problem, rng, starts=population, initial=initial, tolerance=tolerance,
-                        max_iterations=max_iterations, **options)
-    stop = "tolerance" if run.task_error <= tolerance else "max_iterations"
-    settings = {"starts": population, "max_iterations": max_iterations, "restarts": run.restarts, **options}
-    return _result(problem, run.x, stop, run.iterations, run.evaluations, start, np.array([run.cost]),
-                   "multistart_lm", settings, tolerance)
+def _lazy_generator(seed: int | np.random.Generator) -> Callable[[], np.random.Generator]:
+    """A callable returning the generator of ``seed``, created on the first call (a seed costs ~9 µs)."""
+    if isinstance(seed, np.random.Generator):
+        return lambda: seed
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
+    made: list[np.random.Generator] = []
+
+    def generator() -> np.random.Generator:
+        if not made:
+            made.append(np.random.default_rng(int(seed)))
+        return made[0]
+
+    return generator
 
 
-def _result(
-    problem, x, stop, iterations, evaluations, start, history, solver, settings, tolerance, state=None
-) -> IKResult:
-    evaluation = problem.evaluate(x)
-    task_error = float(evaluation.task_error[0])
+def _result(problem: Problem, outcome, solver: str, request: Request, start: float) -> IKResult:
+    x = np.asarray(outcome.x, dtype=float)
+    values = problem.values(x)[0]
+    cost = float(values @ problem._weights)
+    program = problem.program
+    errors = outcome.task_errors
+    if errors is None:
+        errors = task_errors(program, x)
+    success = bool(np.all(errors <= np.where(program.task_angular, request.angle_tolerance, request.tolerance)))
+    history = np.array([cost]) if outcome.history is None else np.asarray(outcome.history, dtype=float)
     return IKResult(
-        configuration=np.asarray(x, dtype=float).copy(),
-        cost=float(evaluation.cost[0]),
-        terms=evaluation.as_dict(0),
-        task_error=task_error,
-        success=bool(task_error <= tolerance),
-        stop_reason=stop,
-        iterations=int(iterations),
-        evaluations=int(evaluations),
+        configuration=x.copy(),
+        cost=cost,
+        terms=dict(zip(problem.names, values.tolist())),
+        task_error=float(values[problem.task_mask].sum()),
+        success=success,
+        stop_reason=outcome.stop_reason,
+        iterations=int(outcome.iterations),
+        evaluations=int(outcome.evaluations),
         wall_time=time.perf_counter() - start,
-        history=np.asarray(history, dtype=float),
+        history=history,
         solver=solver,
-        settings=settings,
-        state=state or {},
+        settings=outcome.settings,
+        state=outcome.state,
+        errors=dict(zip(program.task_blocks, errors.tolist())),
     )

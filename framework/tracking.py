@@ -12,10 +12,13 @@ pass any callable ``builder(k, position, rotation, previous) -> Objective``::
     result = track(robot, paper000("circular"), task, solver="cmaes_fast", iterations_per_point=300, initial=q0)
     result.position_error.mean(), result.smoothness(robot).max_step["arm1"]
 
-Warm start: the previous solution seeds each solve (CMA-ES mean, first population members). With ``predict``
-the tracker adds a first-order *predictor*: the previous solution moved onto the new waypoint by a few
-weighted least-norm Gauss-Newton steps on the task residuals (Pinocchio Jacobians); on by default for the
-``"hybrid"`` solver (which refines with Jacobians anyway), off for the derivative-free metaheuristics.
+Warm start: the previous solution seeds each solve (the local engine's start, CMA-ES mean, first population
+members). With ``predict`` the tracker adds a first-order *predictor*: the previous solution moved onto the new
+waypoint by a few Levenberg-Marquardt steps of the local engine; on by default for solvers that carry their
+search distribution along the path (CMA-ES), which then start from the task.
+
+A :class:`TrackingTask` builds its problem once and moves its targets in place at every waypoint
+(``set_target``); a custom builder's objective is rebuilt per waypoint.
 """
 
 from __future__ import annotations
@@ -27,20 +30,15 @@ from typing import Any
 
 import numpy as np
 
-from .costs import (
-    JointLimitPenalty,
-    Motion,
-    Objective,
-    Orientation,
-    Position,
-    RelativePosition,
-    stacked_residuals,
-)
+from .costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
 from .costs.base import check_weight
+from .costs.program import wrapping_coordinates
+from .engine import LocalSettings, residuals, solve_local
 from .errors import TaskError
 from .problem import Problem
-from .robot import JointKind, Robot
-from .solve import COLD_GLOBAL_ITERATIONS, IKResult, solve
+from .robot import Robot
+from .solve import IKResult, solve
+from .solvers import IKSolver, ik_solver
 from .trajectory import Trajectory
 
 #: ``builder(k, position (3,), rotation (3, 3) or None, previous (n,)) -> Objective`` for waypoint ``k``.
@@ -48,10 +46,10 @@ TaskBuilder = Callable[[int, np.ndarray, "np.ndarray | None", np.ndarray], Objec
 #: ``callback(k, result)`` after each waypoint; returning True stops the tracking (points done are kept).
 TrackingCallback = Callable[[int, IKResult], "bool | None"]
 
-#: Hybrid settings for warm-started waypoints: the predicted configuration already sits on the task, so the
-#: refinement starts straight from it (no global phase) with a short SLSQP run; the first waypoint, whose start
-#: may be far from the path, runs the hybrid's full global phase (seeded with ``initial``) first.
-TRACKING_HYBRID_OPTIONS: dict[str, Any] = {"global_iterations": 0, "refine_iterations": 10}
+#: Generations of the global phase of a solver that has one (the hybrid) at the first waypoint, whose start may
+#: be far from the path: the branch it settles on is kept along the whole path (with none, the Puma circle
+#: under paper 002's weights settles on a branch from which point 2's optimum does not reach).
+FIRST_GLOBAL_ITERATIONS = 30
 COORDINATIONS = ("target", "relative")
 
 #: Step size [rad / m] of a CMA-ES that continues from the previous waypoint's search distribution (solvers with
@@ -141,6 +139,24 @@ class TrackingTask:
             objective = objective + JointLimitPenalty(self.joint_limits)
         return objective
 
+    def update(self, objective: Objective, position: np.ndarray, rotation: np.ndarray | None,
+               previous: np.ndarray) -> bool:
+        """Move the targets of an objective built by :meth:`objective` to the next waypoint, in place.
+
+        Returns False when the objective does not have the shape this waypoint needs (it must be rebuilt).
+        """
+        terms = {t.name: t for _, t in objective}
+        if ("orientation" in terms) != (rotation is not None and self.orientation_weight > 0):
+            return False
+        terms["position"].set_target(position)
+        if "orientation" in terms:
+            terms["orientation"].set_target(rotation)
+        if self.follower is not None and self.coordination == "target":
+            terms["follower"].set_target(position + self.offset)
+        for group in self.motion:
+            terms[f"motion[{group}]"].set_target(previous)
+        return True
+
     def frames(self, robot: Robot) -> tuple[str, ...]:
         """The frames that track: the main frame and, if any, the follower."""
         return (self.frame_of(robot),) + ((self.follower,) if self.follower else ())
@@ -166,17 +182,6 @@ class Smoothness:
     worst_point: dict[str, int]
     approach: dict[str, float]
     steps: dict[str, np.ndarray] = field(repr=False)
-
-
-def wrapping_coordinates(robot: Robot) -> np.ndarray:
-    """``(n,)`` True for coordinates that are angles without end stops (continuous joints, planar θ)."""
-    mask = np.zeros(robot.n, dtype=bool)
-    for joint in robot.joints:
-        if joint.kind is JointKind.CONTINUOUS:
-            mask[joint.index] = True
-        elif joint.kind is JointKind.PLANAR:
-            mask[joint.index + 2] = True
-    return mask
 
 
 def joint_steps(robot: Robot, Q: np.ndarray, initial: np.ndarray | None = None) -> Smoothness:
@@ -317,7 +322,7 @@ def track(
         trajectory: the waypoints (positions, optional orientations) for the tracking frame.
         task: a :class:`TrackingTask`, a builder ``(k, position, rotation, previous) -> Objective``, or ``None``
             (the first end-effector follows the path, motion weight 0.1 on all joints).
-        solver: a registered metaheuristic or ``"hybrid"``.
+        solver: ``"hybrid"``, ``"multistart_lm"`` or a registered metaheuristic.
         seed: seed or generator; one generator runs through all waypoints, so runs are reproducible.
         iterations_per_point: iteration budget of each solve (300 in paper 000; 500 in paper 002).
         population: population size of each solve.
@@ -328,18 +333,18 @@ def track(
             (those with a ``sigma0`` option) get ``sigma0 = warm_spread``, population solvers get half their
             first population drawn from ``N(previous, warm_spread²)`` [rad / m]; ``0`` seeds only the previous
             solution (CMA-ES mean / one member) with the solver's default spread.
-        predict: add the Jacobian predictor to the warm start (default: for ``solver="hybrid"`` and for solvers that
-            continue their search distribution). ``cmaes_fast`` warm-started with the predictor continues from
+        predict: add the engine's predictor to the warm start (default: for solvers that continue their search
+            distribution; local solvers start from the previous solution). ``cmaes_fast`` warm-started with the
+            predictor continues from
             the previous waypoint's distribution: mean at the prediction, its adapted covariance
             (:attr:`~framework.solve.IKResult.state`, see :func:`continued`) and ``sigma0 =``
             :data:`CONTINUED_SIGMA0`; at the first waypoint, :func:`task_covariance` and :data:`FIRST_SIGMA0`
             (``options`` override both; ``predict=False`` falls back to ``warm_spread``).
-        tolerance: a waypoint succeeds if its task error is at most this [m / unitless].
+        tolerance: a waypoint succeeds if every task term is within this [m, or rad for orientations].
         stop_at_tolerance: stop each solve as soon as the task error is within ``tolerance``.
         bounds: ``"resample"``, ``"clip"`` or ``"penalty"`` (see :class:`~framework.problem.Problem`).
-        options: solver options (for the hybrid, merged over :data:`TRACKING_HYBRID_OPTIONS` on warm-started
-            waypoints; a warm-started hybrid solve that misses ``tolerance`` is retried with the hybrid's
-            defaults, which escalate to its global phase, and the lower cost kept).
+        options: solver options (a solver with a global phase, the hybrid, runs :data:`FIRST_GLOBAL_ITERATIONS`
+            generations of it at the first waypoint unless ``options`` set them).
         progress: show a progress bar (``None``: only on a terminal).
         callback: ``callback(k, ik_result)`` after each waypoint; returning True stops early.
 
@@ -355,65 +360,45 @@ def track(
     if int(iterations_per_point) != iterations_per_point or iterations_per_point < 1:
         raise TaskError(f"iterations_per_point must be a positive integer; got {iterations_per_point!r}")
     builder = _builder(robot, task)
+    spec = task if isinstance(task, TrackingTask) else (TrackingTask() if task is None else None)
     q0 = (
         robot.middle.copy()
         if initial is None
         else robot.check_population(initial, "initial configuration")[0]
     )
     q0 = q0.copy()
-    continues = solver != "hybrid" and "covariance" in _solver_defaults(solver)  # carries its distribution on
-    predict = (solver == "hybrid" or continues) if predict is None else bool(predict)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     options = dict(options or {})
+    method = ik_solver(solver, options)  # checks the name and the options once
+    carry = method.carries_distribution
+    predict = carry if predict is None else bool(predict)
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     if not np.isfinite(warm_spread) or warm_spread < 0:
         raise TaskError(f"warm_spread must be a number >= 0 [rad / m]; got {warm_spread!r}")
-    has_sigma0 = solver != "hybrid" and "sigma0" in _solver_defaults(solver)
     state: dict[str, Any] = {}  # the previous solve's search distribution, for solvers that continue it
 
-    rows: list[tuple[IKResult, dict[str, str]]] = []
+    rows: list[tuple[IKResult, tuple[str, ...]]] = []
     previous = q0
     stop_reason = "completed"
+    problem: Problem | None = None
     start, cpu_start = time.perf_counter(), time.process_time()
     with _Progress(progress, trajectory.K, f"tracking {trajectory.name} ({solver})") as bar:
         try:
             for k in range(trajectory.K):
                 rotation = trajectory.rotation(k)
-                problem = Problem(
-                    robot, builder(k, trajectory.positions[k], rotation, previous), bounds=bounds
-                )
-                seeds, solver_options = _warm_start(
-                    problem,
-                    previous,
-                    k,
-                    solver,
-                    options,
-                    warm_start,
-                    warm_spread,
-                    predict,
-                    has_sigma0,
-                    population,
-                    rng,
-                    continues and predict,
-                    state,
-                )
-                run = {
-                    "seed": rng,
-                    "max_iterations": iterations_per_point,
-                    "population": population,
-                    "tolerance": tolerance,
-                    "stop_at_tolerance": stop_at_tolerance,
-                    "initial": seeds,
-                }
-                result = solve(problem, solver, options=solver_options or None, **run)
-                if solver == "hybrid" and solver_options != options and not result.success:
-                    # the local step missed (a joint limit, a branch to leave): the full hybrid (escalates to its global phase)
-                    retry = solve(problem, solver, options=options or None, **run)
-                    if retry.cost < result.cost:
-                        result = retry
+                position = trajectory.positions[k]
+                moved = problem is not None and spec is not None and spec.update(
+                    problem.objective, position, rotation, previous)
+                if not moved:
+                    problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds)
+                seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start, warm_spread,
+                                                    predict and warm_start, population, rng, carry, state)
+                result = solve(problem, solver, seed=rng, max_iterations=iterations_per_point,
+                               population=population, tolerance=tolerance, stop_at_tolerance=stop_at_tolerance,
+                               initial=seeds, options=solver_options or None)
                 if result.stop_reason == "interrupted":
                     stop_reason = "interrupted"
                     break
-                rows.append((result, dict(zip(problem.names, (term_kind(t) for _, t in problem.objective)))))
+                rows.append((result, problem.program.term_kinds))
                 previous, state = result.configuration, result.state
                 bar.advance(result.task_error)
                 if callback is not None and callback(k, result):
@@ -442,12 +427,11 @@ def _warm_start(
     problem: Problem,
     previous: np.ndarray,
     k: int,
-    solver: str,
+    method: IKSolver,
     options: dict[str, Any],
     warm_start: bool,
     warm_spread: float,
     predict: bool,
-    has_sigma0: bool,
     population: int,
     rng: np.random.Generator,
     carry: bool,
@@ -456,34 +440,29 @@ def _warm_start(
     """Warm-start points ``(k, n)`` (or ``None``: cold) and solver options for waypoint ``k`` (see :func:`track`);
     ``carry``: the solver continues its search distribution, ``state``: the previous solve's
     :attr:`~framework.solve.IKResult.state` (empty at the first waypoint)."""
-    if not warm_start:  # the hybrid would otherwise start from the motion terms' previous configuration
-        return None, {"warm_start": False, **options} if solver == "hybrid" else options
+    defaults = method.defaults()
+    if not warm_start:  # a local solver would otherwise start from the motion terms' previous configuration
+        return None, ({"warm_start": False, **options} if "warm_start" in defaults else options)
     seeds = [predictor(problem, previous), previous] if predict else [previous]
     if k == 0:  # the first waypoint may be far from the initial configuration: the solver's own spread
-        if solver == "hybrid":  # and the hybrid's full global phase, as from a uniform start
-            return np.array(seeds), {"global_iterations": COLD_GLOBAL_ITERATIONS, **options}
+        if "global_iterations" in defaults:  # and a global phase where the solver has one
+            return np.array(seeds), {"global_iterations": FIRST_GLOBAL_ITERATIONS, **options}
         covariance = task_covariance(problem, seeds[0]) if carry else None
         if covariance is not None:  # CMA-ES from the prediction, along the task's null space first
             return np.array(seeds), {"sigma0": FIRST_SIGMA0, "covariance": covariance, **options}
         return np.array(seeds), options
-    if solver == "hybrid":
-        return np.array(seeds), {**TRACKING_HYBRID_OPTIONS, **options}
+    if method.uses_jacobians:
+        return np.array(seeds), options
     if carry and state:  # CMA-ES: mean at the prediction, the previous waypoint's adapted covariance, a small step
         return np.array(seeds), {"sigma0": CONTINUED_SIGMA0, **continued(state, task_covariance(problem, seeds[0])),
                                  **options}
-    if warm_spread > 0 and has_sigma0:
-        return np.array(seeds), {"sigma0": warm_spread, **options}
+    if warm_spread > 0 and method.step_option:
+        return np.array(seeds), {method.step_option: warm_spread, **options}
     if warm_spread > 0:
         robot = problem.robot
         cloud = previous + warm_spread * rng.standard_normal((population // 2, robot.n))
         seeds += list(np.clip(cloud, robot.lower, robot.upper))
     return np.array(seeds), options
-
-
-def _solver_defaults(solver: str) -> dict[str, Any]:
-    from .solvers import get_solver
-
-    return dict(get_solver(solver).DEFAULTS)
 
 
 def _builder(robot: Robot, task: TrackingTask | TaskBuilder | None) -> TaskBuilder:
@@ -512,7 +491,7 @@ def _result(trajectory, q0, rows, stop_reason, solver, settings, times, toleranc
     terms = {name: np.array([r.terms.get(name, np.nan) for r in results]) for name in names}
 
     def total(kind: str) -> np.ndarray:
-        return np.array([sum(v for name, v in r.terms.items() if kinds[name] == kind) for r, kinds in rows])
+        return np.array([sum(v for v, what in zip(r.terms.values(), kinds) if what == kind) for r, kinds in rows])
 
     return TrackingResult(
         trajectory=trajectory,
@@ -527,24 +506,13 @@ def _result(trajectory, q0, rows, stop_reason, solver, settings, times, toleranc
         iterations=np.array([r.iterations for r in results], dtype=int),
         evaluations=np.array([r.evaluations for r in results], dtype=int),
         times=np.array([r.wall_time for r in results]),
-        success=np.array([r.task_error <= tolerance for r in results], dtype=bool),
+        success=np.array([r.success for r in results], dtype=bool),
         stop_reason=stop_reason,
         solver=solver,
         settings=settings,
         wall_time=times[0],
         cpu_time=times[1],
     )
-
-
-def term_kind(term) -> str:
-    """``"position"`` (position, relative position), ``"orientation"``, ``"motion"`` or ``"other"``."""
-    if isinstance(term, (Position, RelativePosition)):
-        return "position"
-    if isinstance(term, Orientation):
-        return "orientation"
-    if isinstance(term, Motion):
-        return "motion"
-    return "other"
 
 
 def continued(state: dict[str, Any], task: np.ndarray | None) -> dict[str, Any]:
@@ -563,60 +531,26 @@ def task_covariance(problem: Problem, x: np.ndarray, *, ratio: float = TASK_SPAC
     """``(n, n)`` covariance for a search from ``x`` on the task: identity on the null space of the stacked task
     Jacobian, ``ratio`` on its row space (moves that leave the task are ``1/√ratio`` times narrower).
 
-    ``None`` when ``x`` is not on the task (task error above 1e-9) or the task terms have no residual view.
+    ``None`` when ``x`` is not on the task (task error above 1e-9) or there is no task term.
     """
-    robot = problem.robot
-    task = [t for _, t in problem.objective if t.is_task]
-    if not task or problem.evaluate(x).task_error[0] > 1e-9:
+    if not problem.program.task_rows or problem.evaluate(x).task_error[0] > 1e-9:
         return None
-    try:
-        _, J = stacked_residuals(robot, task, x)
-    except NotImplementedError:
-        return None
+    _, J = residuals(problem.program, x)
     row = np.linalg.pinv(J, rcond=1e-10) @ J  # projector onto the row space
     row = 0.5 * (row + row.T)
-    return np.eye(robot.n) - (1.0 - ratio) * row
+    return np.eye(problem.robot.n) - (1.0 - ratio) * row
 
 
-def predictor(problem: Problem, x: np.ndarray, *, steps: int = 5, damping: float = 1e-10) -> np.ndarray:
-    """``x`` moved onto the task by weighted least-norm Gauss-Newton steps (the tracking predictor).
+#: The predictor: a few Levenberg-Marquardt steps of the local engine, no restart, no regularization.
+PREDICTOR = LocalSettings(tolerance=1e-12, max_iterations=5, restarts=False, regularize=False, polish=0)
 
-    Each step solves ``J Δx = −r`` for the stacked task residuals with the smallest ``Σ w_i Δx_i²``, where
-    ``w_i`` is the total weight of the motion terms on coordinate ``i`` (so the base moves less than the
-    arms when paper 000's β < γ); the result stays in the search box. Returns ``x`` itself when the task terms
-    have no residual view or no step reduces the residual.
-    """
-    robot = problem.robot
-    task = [t for _, t in problem.objective if t.is_task]
-    if not task:
-        return x.copy()
-    w = np.zeros(robot.n)
-    for weight, term in problem.objective:
-        if isinstance(term, Motion):
-            w[term.indices(robot)] += weight
-    w = np.maximum(w, 1e-3 * max(float(w.max()), 1.0)) if w.any() else np.ones(robot.n)
-    inv_w = 1.0 / w
 
-    try:
-        r, J = stacked_residuals(robot, task, x)
-    except NotImplementedError:
-        return x.copy()
-    for _ in range(steps):
-        if np.linalg.norm(r) < 1e-14:
-            break
-        JW = J * inv_w
-        A = JW @ J.T
-        A[np.diag_indices_from(A)] += damping * (1.0 + np.trace(A))
-        try:
-            dx = -JW.T @ np.linalg.solve(A, r)
-        except np.linalg.LinAlgError:
-            break
-        y = np.clip(x + dx, robot.lower, robot.upper)
-        r_new, J_new = stacked_residuals(robot, task, y)
-        if not np.linalg.norm(r_new) < np.linalg.norm(r):
-            break
-        x, r, J = y, r_new, J_new
-    return x.copy()
+def predictor(problem: Problem, x: np.ndarray) -> np.ndarray:
+    """``x`` moved onto the task by a few Levenberg-Marquardt steps of the local engine (the tracking predictor);
+    ``x`` itself when the problem has no task term."""
+    if not problem.program.task_rows:
+        return np.array(x, dtype=float)
+    return solve_local(problem.program, x, np.random.default_rng(0), PREDICTOR).x.copy()
 
 
 # ---------------------------------------------------------------------------------------------- progress

@@ -8,7 +8,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import framework as fw
-from framework.costs import JointLimitPenalty, LocalKinematics, Motion, Orientation, Position, RelativePosition
+from framework.costs import JointLimitPenalty, Motion, Orientation, Position, Program, RelativePosition
+from framework.engine import objective_derivatives_at, residuals
 from framework.problem import Problem
 
 
@@ -50,14 +51,19 @@ def test_orientation_is_the_quaternion_vector_norm_from_scipy(robot, rng):
 
 
 @pytest.mark.parametrize("phi", [0.0, 1e-9, 1e-4, 0.3, 1.5, 2.0, np.pi - 1e-6, np.pi])
-def test_orientation_error_is_sin_half_angle(phi):
-    from framework.costs import quaternion_error
-
+def test_orientation_residual_is_the_rotation_vector_and_the_value_sin_half_angle(phi):
+    """Residual log(R_tᵀR) against scipy's rotation vector (its norm is the angle, up to π), value sin(φ/2)."""
+    robot = fw.load_robot("youbot_arm")
+    x = robot.middle
+    R = robot.frame_placement(x, "ee").rotation
     axis = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
-    R_target = Rotation.random(random_state=7).as_matrix()
-    R = R_target @ Rotation.from_rotvec(phi * axis).as_matrix()
-    assert quaternion_error(R[None], R_target)[0] == pytest.approx(np.sin(phi / 2), rel=1e-9, abs=1e-15)
-    assert quaternion_error(R_target[None], R_target)[0] == 0.0
+    R_target = R @ Rotation.from_rotvec(-phi * axis).as_matrix()  # R_targetᵀ R = exp(φ axis)
+    term = Orientation("ee", R_target)
+    r, _ = residuals(Program(robot, 1.0 * term), x)
+    assert np.linalg.norm(r) == pytest.approx(phi, rel=1e-9, abs=1e-12)
+    if phi < np.pi - 1e-3:  # at π the axis sign is a convention
+        np.testing.assert_allclose(r, Rotation.from_matrix(R_target.T @ R).as_rotvec(), atol=1e-9)
+    assert Problem(robot, term).values(x)[0, 0] == pytest.approx(np.sin(phi / 2), rel=1e-9, abs=1e-15)
 
 
 def test_orientation_target_as_matrix_or_quaternion_agree(robot, rng):
@@ -105,34 +111,114 @@ def test_composition_adds_weighted_terms_exactly(robot, rng):
     assert [w for w, _ in 2 * (t1 + 0.5 * t2)] == [2.0, 1.0]
 
 
-def test_residual_jacobians_match_finite_differences(robot, rng):
+def all_terms(robot, rotation_seed: int) -> list:
+    """One term of every standard kind (task terms, L2 and L1 motion, the limit penalty)."""
     prev = robot.middle
-    terms = [
+    return [
         Position("arm1_ee", [0.5, -0.2, 0.45]),
         RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
-        Orientation("arm2_ee", Rotation.random(random_state=1).as_matrix()),
+        Orientation("arm2_ee", Rotation.random(random_state=rotation_seed).as_matrix()),
         Motion("arm2", prev),
+        Motion("base", prev, norm="l1"),
+        JointLimitPenalty(lower=robot.lower + 0.5, upper=robot.upper - 0.5),
     ]
+
+
+def rho(term, r: np.ndarray, robot) -> float:
+    """A term's value from its residual, written out here (the definition each term's docstring gives)."""
+    if isinstance(term, Orientation):
+        return float(np.sin(min(np.linalg.norm(r), np.pi) / 2))
+    if isinstance(term, Motion) and term.norm == "l1":
+        return float(np.abs(r).sum() / (len(r) * np.pi))
+    if isinstance(term, JointLimitPenalty):
+        return float(term.weight * np.abs(r).sum())
+    return float(np.linalg.norm(r))
+
+
+def test_residual_jacobians_match_finite_differences(robot, rng):
+    """Every block's Jacobian (compiled) against central differences of its residual (compiled)."""
     h = 1e-7
     for x in robot.random_configurations(rng, 3):
-        for term in terms:
-            J = term.jacobian(robot, x, LocalKinematics(robot, x))
-            fd = np.column_stack([
-                (term.residual(robot, x + e, LocalKinematics(robot, x + e))
-                 - term.residual(robot, x - e, LocalKinematics(robot, x - e))) / (2 * h)
-                for e in np.eye(robot.n) * h
-            ])
+        for term in all_terms(robot, 1)[:5]:
+            program = Program(robot, 1.0 * term)
+            _, J = residuals(program, x, -1)
+            fd = np.column_stack([(residuals(program, x + e, -1)[0] - residuals(program, x - e, -1)[0]) / (2 * h)
+                                  for e in np.eye(robot.n) * h])
             np.testing.assert_allclose(J, fd, atol=2e-6, err_msg=term.name)
 
 
-def test_residual_norms_are_the_values(robot, rng):
-    x = robot.random_configurations(rng, 1)[0]
-    local = LocalKinematics(robot, x)
-    for term in (Position("arm1_ee", [0.1, 0.2, 0.3]), RelativePosition("arm1_ee", "arm2_ee", [0, 0, 0.1])):
-        assert np.linalg.norm(term.residual(robot, x, local)) == pytest.approx(Problem(robot, term).values(x)[0, 0], abs=1e-13)
-    o = Orientation("arm1_ee", np.eye(3))
-    angle = np.linalg.norm(o.residual(robot, x, local))
-    assert np.sin(angle / 2) == pytest.approx(Problem(robot, o).values(x)[0, 0], abs=1e-12)
+def test_position_residual_and_jacobian_are_pinocchio_s(robot, rng):
+    """Position residual p − t and its Jacobian against Pinocchio's frame placement and LOCAL_WORLD_ALIGNED
+    Jacobian (times dv/dx for the planar base)."""
+    target = np.array([0.3, -0.1, 0.2])
+    program = Program(robot, 1.0 * Position("arm2_ee", target))
+    data = robot.model.createData()
+    fid = robot.frame_id("arm2_ee")
+    for x in robot.random_configurations(rng, 5):
+        r, J = residuals(program, x)
+        J_pin = pin.computeFrameJacobian(robot.model, data, robot.to_pinocchio(x), fid, pin.LOCAL_WORLD_ALIGNED)
+        np.testing.assert_allclose(r, data.oMf[fid].translation - target, atol=1e-13)
+        np.testing.assert_allclose(J, (J_pin @ robot.coordinate_jacobian(x))[:3], atol=1e-12)
+
+
+def test_values_are_rho_of_the_residuals_in_both_views(robot, rng):
+    """value = ρ(r) for every term; the population kernel and the single-configuration residuals agree."""
+    X = robot.random_configurations(rng, 6)
+    X[0, -1] = robot.upper[-1] + 0.7  # one member outside the limits (the penalty is not zero there)
+    for term in all_terms(robot, 3):
+        program = Program(robot, 1.0 * term)
+        values = Problem(robot, term).values(X)[:, 0]
+        for x, value in zip(X, values):
+            r, _ = residuals(program, x, 0 if isinstance(term, JointLimitPenalty) else -1)
+            assert value == pytest.approx(rho(term, r, robot), rel=1e-12, abs=1e-14), term.name
+
+
+def test_value_gradients_and_hessians_match_finite_differences(robot, rng):
+    """The Newton phases' gradient against differences of the population values, and their Hessian (second-order
+    kinematics included) against differences of that gradient — for every smooth term."""
+    h = 1e-6
+    for x in robot.random_configurations(rng, 3):
+        for term in all_terms(robot, 2)[:4]:
+            program = Program(robot, 2.0 * term)
+            problem = Problem(robot, 2.0 * term)
+            _, g, H = objective_derivatives_at(program, x)
+            E = np.eye(robot.n) * h
+            fd = (problem.cost(x + E) - problem.cost(x - E)) / (2 * h)
+            np.testing.assert_allclose(g, fd, atol=1e-6, err_msg=term.name)
+            if isinstance(term, Orientation):
+                continue  # its second order is exact on the target only (below)
+            fdH = np.column_stack([(objective_derivatives_at(program, x + e)[1] - objective_derivatives_at(
+                program, x - e)[1]) / (2 * h) for e in E])
+            np.testing.assert_allclose(H, fdH, atol=2e-5, err_msg=term.name)
+
+
+def test_lagrangian_curvature_of_a_task_on_its_target(robot, rng):
+    """Σ μ·∇²r of position, relative position and orientation blocks (from the product of exponentials) against
+    differences of Jᵀμ, at configurations where the orientation is on its target."""
+    h = 1e-6
+    for x in robot.random_configurations(rng, 3):
+        R = robot.frame_placement(x, "arm2_ee").rotation
+        for term in (Position("arm1_ee", [0.5, -0.2, 0.45]), RelativePosition("arm1_ee", "arm2_ee", [0.2, 0, 0]),
+                     Orientation("arm2_ee", R)):
+            program = Program(robot, 1.0 * term)
+            mu = rng.standard_normal(3)
+            _, J = residuals(program, x)
+            curvature = _curvature(program, x, mu)
+            fd = np.column_stack([(residuals(program, x + e)[1].T @ mu - residuals(program, x - e)[1].T @ mu)
+                                  / (2 * h) for e in np.eye(robot.n) * h])
+            np.testing.assert_allclose(curvature, fd, atol=1e-6, err_msg=term.name)
+
+
+def _curvature(program, x, mu):
+    from framework.costs.blocks import block_curvature
+    from framework.costs.kernels import linearize, workspace
+
+    ws = workspace(program.kin, program.prog, x.size)
+    linearize(x, 1, program.kin, program.prog, ws, True, 1)
+    H = np.zeros((x.size, x.size))
+    block_curvature(0, mu, ws[0], ws[2], program.prog[0], program.prog[2], program.prog[5], program.prog[6], ws[3],
+                    0, H)
+    return H
 
 
 # ---------------------------------------------------------------------- bad input
@@ -174,46 +260,6 @@ def test_wrong_population_shape_in_cost(robot):
         problem.cost(np.zeros((4, 12)))
     with pytest.raises(fw.ConfigurationError):
         problem.cost(np.full((4, 13), np.nan))
-
-
-def smooth_terms(robot, rotation_seed: int) -> list:
-    """One term of every kind with a gradient: task terms, L2 and L1 motion."""
-    prev = robot.middle
-    return [
-        Position("arm1_ee", [0.5, -0.2, 0.45]),
-        RelativePosition("arm1_ee", "arm2_ee", [0.2, -0.3, -0.2]),
-        Orientation("arm2_ee", Rotation.random(random_state=rotation_seed).as_matrix()),
-        Motion("arm2", prev),
-        Motion("base", prev, norm="l1"),
-    ]
-
-
-def test_value_gradients_match_finite_differences(robot, rng):
-    """The gradients the refinement uses (L-BFGS-B on the whole objective) against the population values."""
-    terms = smooth_terms(robot, 2)
-    h = 1e-7
-    for x in robot.random_configurations(rng, 3):
-        for term in terms:
-            problem = Problem(robot, term)
-            g = term.gradient(robot, x, LocalKinematics(robot, x))
-            E = np.eye(robot.n) * h
-            fd = (problem.values(x + E)[:, 0] - problem.values(x - E)[:, 0]) / (2 * h)
-            np.testing.assert_allclose(g, fd, atol=1e-6, err_msg=term.name)
-
-
-def test_linearization_is_the_population_value_and_the_residual_view(robot, rng):
-    """One kinematics call gives value, gradient, residual and Jacobian: each equal to its separate computation."""
-    terms = smooth_terms(robot, 3) + [JointLimitPenalty(lower=robot.lower + 0.5, upper=robot.upper - 0.5)]
-    for x in robot.random_configurations(rng, 3):
-        local = LocalKinematics(robot, x)
-        for term in terms:
-            lin = term.linearize(robot, x, local)
-            assert lin.value == pytest.approx(Problem(robot, term).values(x)[0, 0], rel=1e-12, abs=1e-14), term.name
-            if isinstance(term, JointLimitPenalty):
-                assert lin.residual is None and lin.jacobian is None
-                continue
-            np.testing.assert_allclose(lin.residual, term.residual(robot, x, local), atol=1e-15, err_msg=term.name)
-            np.testing.assert_allclose(lin.jacobian, term.jacobian(robot, x, local), atol=1e-15, err_msg=term.name)
 
 
 def test_problem_previous_is_where_the_motion_terms_measure_from(robot, rng):

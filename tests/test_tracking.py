@@ -103,14 +103,13 @@ def test_cmaes_continues_the_previous_waypoints_distribution(mobile_dual):
 
 
 def test_task_covariance_is_wide_along_the_null_space_and_narrow_across_the_task(mobile_dual):
-    from framework.costs import LocalKinematics
+    from framework.engine import residuals
     from framework.tracking import task_covariance
 
     problem = Problem(mobile_dual, TrackingTask(**PAPER000).objective(mobile_dual, 0, [0.5, -0.25, 0.4], None, Q_PREV))
     x = predictor(problem, Q_PREV)
     C = task_covariance(problem, x, ratio=1e-4)
-    local = LocalKinematics(mobile_dual, x)
-    J = np.vstack([t.jacobian(mobile_dual, x, local) for _, t in problem.objective if t.is_task])
+    _, J = residuals(problem.program, x)
     _, s, Vt = np.linalg.svd(J)
     rank = int(np.sum(s > 1e-10 * s[0]))
     row, null = Vt[:rank], Vt[rank:]
@@ -138,8 +137,8 @@ def test_warm_start_cuts_evaluations(arm):
     }
     assert runs[True].all_success and runs[False].all_success
     # after the first point (solved from the same start), warm-started solves need fewer evaluations: CMA-ES
-    # still adapts its covariance from scratch (~25 % saved); the hybrid's predictor + refinement skips its
-    # global phase (> 95 % saved)
+    # still adapts its covariance from scratch (~25 % saved); the hybrid's engine starts next to the solution
+    # (a cold start is the middle of the box: 12 evaluations per point here, 8-11 warm)
     warm, cold = (runs[w].evaluations[1:].sum() for w in (True, False))
     assert warm < 0.75 * cold
     hybrid = {
@@ -147,7 +146,7 @@ def test_warm_start_cuts_evaluations(arm):
         for w in (True, False)
     }
     assert hybrid[True].position_error.max() < 1e-9 and hybrid[False].position_error.max() < 1e-9
-    assert hybrid[True].evaluations[1:].sum() < 0.05 * hybrid[False].evaluations[1:].sum()
+    assert hybrid[True].evaluations[1:].sum() < 0.9 * hybrid[False].evaluations[1:].sum()
 
 
 def test_orientation_tracking_with_paper002_weights():

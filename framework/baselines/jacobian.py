@@ -1,8 +1,9 @@
 """Jacobian pseudo-inverse IK: the conventional methods the papers compare against.
 
 Closed-loop inverse kinematics on the position of one frame: at every iteration ``Δx = K J⁺ e`` with
-``e = t − p(x)`` [m] and ``J`` the ``3 × n`` position Jacobian in joint coordinates (Pinocchio, world-aligned,
-via :class:`~framework.costs.LocalKinematics`, so a planar mobile base is handled like any joint). ``J⁺`` is
+``e = t − p(x)`` [m] and ``J`` the ``3 × n`` position Jacobian in joint coordinates (the residual and Jacobian
+of a :class:`~framework.costs.Position` term from the compiled kernels, so a planar mobile base is handled like
+any joint). ``J⁺`` is
 
 - ``"pinv"``: the Moore-Penrose pseudo-inverse by SVD, singular values below ``rcond · σ_max`` dropped
   (paper 001's "conventional method" inverts this way; near a singularity ``1/σ`` explodes: the jump);
@@ -15,7 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..costs import LocalKinematics
+from ..costs import Position, Program
+from ..engine import residuals
 from ..errors import TaskError
 from ..robot import Robot
 
@@ -48,8 +50,11 @@ def inverse(J: np.ndarray, method: str, *, rcond: float = 1e-6, damping: float =
 
 def position_and_jacobian(robot: Robot, x: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
     """World position ``(3,)`` [m] of ``frame`` and its position Jacobian ``(3, n)`` in joint coordinates."""
-    local = LocalKinematics(robot, x)
-    return local.placement(frame).translation.copy(), local.frame_jacobian(frame)[:3]
+    key = ("position of", frame)
+    program = robot._cache.get(key)
+    if program is None:  # the residual p(x) − 0 of a position term is the position itself
+        program = robot._cache[key] = Program(robot, 1.0 * Position(frame, np.zeros(3)))
+    return residuals(program, x)
 
 
 def jacobian_ik(

@@ -1,22 +1,24 @@
-"""Cost terms (the task layer): each maps a population ``(pop, n)`` to ``(pop,)``; they compose with weights."""
+"""Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
-from .base import Linearization, LocalKinematics, Objective, Term, stacked_residuals
+from .base import LEVELS, Objective, Term, check_weight
 from .limits import JointLimitPenalty
 from .motion import Motion
-from .orientation import Orientation, quaternion_error
+from .orientation import Orientation, rotation_from
 from .position import Position
+from .program import Block, Program
 from .relative import RelativePosition
 
 __all__ = [
+    "LEVELS",
+    "Block",
     "JointLimitPenalty",
-    "Linearization",
-    "LocalKinematics",
     "Motion",
     "Objective",
     "Orientation",
     "Position",
+    "Program",
     "RelativePosition",
     "Term",
-    "quaternion_error",
-    "stacked_residuals",
+    "check_weight",
+    "rotation_from",
 ]

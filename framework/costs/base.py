@@ -1,78 +1,87 @@
 """Cost terms and their weighted composition.
 
-A :class:`Term` maps a population of joint coordinates ``X`` ``(pop, n)`` to one value per member ``(pop,)``,
-reading frame poses computed once for all terms (:class:`~framework.kinematics.FramePoses`). Terms compose
+A :class:`Term` is defined once, by its *blocks* (:class:`~framework.costs.program.Block`): residuals ``r(x)``
+evaluated by compiled kernels together with the population forward kinematics, and a ρ that turns a residual
+into the term's value (``‖r‖``, ``sin(‖r‖/2)``, ``Σ|r|``, ...). Every consumer reads terms through that one
+definition: metaheuristics read the values of a population, the local engine the residuals, their Jacobians
+and second-order kinematics, tracking and recordings the per-term values and task errors. Terms compose
 readably into an :class:`Objective`::
 
     f = 1.2 * Position("arm1_ee", t1) + 1.2 * Position("arm2_ee", t2) + 0.1 * Motion("base", q_prev)
 
-A term that is a distance to a target (position, orientation, relative position) also exposes a *residual*
-``r(x)`` with its analytic Jacobian from Pinocchio (``residual`` / ``jacobian``), so the same definition feeds
-a metaheuristic (scalar, population) and a local refinement (residual + Jacobian). Such terms are *task*
-terms: their unweighted sum is the task error that decides success.
+Each term has a *level*: ``"task"`` terms (positions, orientations, poses, relative positions) are reached
+first and decide success, each held to a tolerance in its own unit (m or rad); ``"regularizer"`` terms (motion)
+are minimized without leaving the task; ``"value"`` terms (the joint-limit penalty) only add to the value.
+A user term without blocks implements :meth:`Term.value` in numpy; metaheuristics can use it, the local engine
+cannot.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pinocchio as pin
 
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
 
+if TYPE_CHECKING:  # pragma: no cover
+    from .program import Block
+
+LEVELS = ("task", "regularizer", "value")
+
 
 class Term:
-    """One cost term. Subclasses set :attr:`frames` and implement :meth:`value`.
+    """One cost term. Subclasses set :attr:`frames`, :attr:`level` and implement :meth:`blocks`.
 
     Attributes:
         name: label used in reports and recordings.
-        frames: frames whose world poses :meth:`value` reads.
-        is_task: True for terms that measure a distance to a target (they decide success).
+        frames: frames the term reads.
+        level: ``"task"``, ``"regularizer"`` or ``"value"`` (see the module docstring).
+        version: incremented whenever a target changes in place (packed problems re-read the term then).
     """
 
     name: str = "term"
     frames: tuple[str, ...] = ()
-    is_task: bool = False
+    level: str = "regularizer"
+    version: int = 0
+
+    @property
+    def is_task(self) -> bool:
+        """Whether the term is a task term (reached first; decides success)."""
+        return self.level == "task"
 
     def validate(self, robot: Robot) -> None:
         """Raise a :class:`~framework.errors.MetaikError` if the term cannot apply to ``robot``."""
         for frame in self.frames:
             robot.frame_id(frame)
 
-    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
-        """Unweighted value for each member of ``X`` ``(pop, n)``: shape ``(pop,)``."""
-        raise NotImplementedError
+    def blocks(self, robot: Robot) -> tuple[Block, ...] | None:
+        """The term's residual blocks for ``robot`` (``None``: no compiled form, :meth:`value` is used)."""
+        return None
 
-    def bind(self, robot: Robot) -> Callable[[np.ndarray, FramePoses], np.ndarray]:
-        """``value`` specialized to one robot, with lookups (frames, groups) done once: the hot path."""
-        return lambda X, poses: self.value(robot, X, poses)
+    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses | None = None) -> np.ndarray:
+        """Unweighted value of each member of ``X`` ``(pop, n)``: shape ``(pop,)``.
 
-    # Residual view, for local refinement (task terms and smooth regularizers).
-    def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        """Residual ``r(x)`` ``(m,)`` whose norm is :meth:`value`."""
-        raise NotImplementedError(f"{type(self).__name__} has no residual view")
-
-    def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        """``dr/dx`` ``(m, n)`` in joint coordinates."""
-        raise NotImplementedError(f"{type(self).__name__} has no residual view")
-
-    def gradient(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        """``d value / dx`` ``(n,)`` at one configuration."""
-        return self.linearize(robot, x, local).gradient
-
-    def linearize(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> Linearization:
-        """Value, gradient, residual and Jacobian at one configuration ``x`` ``(n,)``, from one kinematics call.
-
-        The default is for terms whose value is ``‖r(x)‖`` (gradient ``Jᵀr/‖r‖``, 0 where ``r = 0``).
+        Terms with blocks are evaluated by the compiled kernel (``poses`` is not needed); a user term without
+        blocks overrides this with numpy code reading ``poses`` (the world poses of its :attr:`frames`).
         """
-        r = self.residual(robot, x, local)
-        J = self.jacobian(robot, x, local)
-        norm = float(np.sqrt(r @ r))
-        return Linearization(norm, J.T @ r / norm if norm > 0 else np.zeros_like(x), r, J)
+        if self.blocks(robot) is None:
+            raise NotImplementedError(f"{type(self).__name__} defines neither blocks() nor value()")
+        from .program import Program
+
+        X = robot.check_population(X, finite=False)
+        return Program(robot, Objective(((1.0, self),))).values(X)[:, 0]
+
+    def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
+        """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""
+        return {}
+
+    def _touch(self) -> None:
+        self.version = self.version + 1
 
     # Composition
     def __mul__(self, weight: float) -> Objective:
@@ -89,19 +98,11 @@ class Term:
         return NotImplemented
 
 
-@dataclass(frozen=True)
-class Linearization:
-    """A term at one configuration: its value, gradient ``(n,)`` and, for terms with a residual view, the
-    residual ``(m,)`` and its Jacobian ``(m, n)`` (``None`` otherwise, e.g. the joint-limit penalty)."""
-
-    value: float
-    gradient: np.ndarray
-    residual: np.ndarray | None = None
-    jacobian: np.ndarray | None = None
-
-
 def check_weight(weight: float) -> float:
-    w = float(weight)
+    try:
+        w = float(weight)
+    except (TypeError, ValueError):
+        raise TaskError(f"a cost weight must be a finite number >= 0; got {weight!r}") from None
     if not np.isfinite(w) or w < 0:
         raise TaskError(f"a cost weight must be a finite number >= 0; got {weight!r}")
     return w
@@ -152,50 +153,12 @@ class Objective:
         return tuple(dict.fromkeys(f for _, t in self.terms for f in t.frames))
 
 
-class LocalKinematics:
-    """Pinocchio kinematics and frame Jacobians at one configuration, for residual views.
-
-    Jacobians are returned in joint coordinates (``J_pin @ dv/dx``), world-aligned (``LOCAL_WORLD_ALIGNED``).
-    """
-
-    def __init__(self, robot: Robot, x: np.ndarray, data: pin.Data | None = None):
-        self.robot = robot
-        self.x = np.asarray(x, dtype=float)
-        self.data = robot.model.createData() if data is None else data  # reuse one in loops: it is costly
-        q = robot.to_pinocchio(self.x)
-        pin.computeJointJacobians(robot.model, self.data, q)
-        pin.updateFramePlacements(robot.model, self.data)
-        self._T = None if robot._q_is_x else robot.coordinate_jacobian(self.x)
-
-    def placement(self, frame: str) -> pin.SE3:
-        return self.data.oMf[self.robot.frame_id(frame)]
-
-    def frame_jacobian(self, frame: str) -> np.ndarray:
-        """``(6, n)``: linear rows then angular rows, world-aligned, in joint coordinates."""
-        J = pin.getFrameJacobian(self.robot.model, self.data, self.robot.frame_id(frame), pin.LOCAL_WORLD_ALIGNED)
-        return J if self._T is None else J @ self._T
-
-
-def stacked_residuals(
-    robot: Robot, terms: Sequence[Term], x: np.ndarray, local: LocalKinematics | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Residuals ``(m,)`` and Jacobians ``(m, n)`` of ``terms`` at ``x``, stacked, from one kinematics call.
-
-    Raises NotImplementedError for a term without a residual view.
-    """
-    local = LocalKinematics(robot, x) if local is None else local
-    r = np.concatenate([t.residual(robot, x, local) for t in terms])
-    return r, np.vstack([t.jacobian(robot, x, local) for t in terms])
-
-
-def row_norms(D: np.ndarray) -> np.ndarray:
-    """Euclidean norm of each row of ``D`` ``(pop, m)``: shape ``(pop,)``."""
-    return np.sqrt(np.einsum("ij,ij->i", D, D))
-
-
 def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str) -> np.ndarray:
     """A finite float vector of length ``size``; raises :class:`TaskError` naming ``what``."""
-    v = np.asarray(value, dtype=float)
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TaskError(f"{what} must be {size} numbers; got {value!r}") from None
     if v.shape != (size,):
         raise TaskError(f"{what} must have shape ({size},); got {v.shape}")
     if not np.all(np.isfinite(v)):

@@ -7,16 +7,21 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..kinematics import FramePoses
 from ..robot import Robot, check_bounds
-from .base import Linearization, Term
+from . import blocks as B
+from .base import Term
+from .program import Block
 
 
 class JointLimitPenalty(Term):
     """Sum of limit violations [rad or m] times ``weight`` (δ, large: 1e3 by default).
 
     Limits default to the robot's search bounds; pass ``lower``/``upper`` ``(n,)`` for others. Zero inside.
+    A ``"value"`` term: the local engine keeps every step inside the box, where it is zero.
     """
+
+    level = "value"
+    penalizes_limits = True  # the problem's "penalty" bounds mode adds one unless the objective has one
 
     def __init__(
         self,
@@ -40,13 +45,6 @@ class JointLimitPenalty(Term):
     def validate(self, robot: Robot) -> None:
         check_bounds(*self.limits(robot), robot.coordinate_names)
 
-    def linearize(self, robot: Robot, x: np.ndarray, local) -> Linearization:
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
         lower, upper = self.limits(robot)
-        violation = np.maximum(0.0, lower - x) + np.maximum(0.0, x - upper)
-        gradient = self.weight * ((x > upper).astype(float) - (x < lower).astype(float))
-        return Linearization(self.weight * float(violation.sum()), gradient)
-
-    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
-        lower, upper = self.limits(robot)
-        violation = np.maximum(0.0, lower - X) + np.maximum(0.0, X - upper)
-        return self.weight * violation.sum(axis=-1)
+        return (Block(B.LIMITS, B.L1, robot.n, params=np.concatenate([lower, upper]), scale=self.weight),)

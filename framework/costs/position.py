@@ -6,35 +6,36 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term, as_vector, row_norms
+from . import blocks as B
+from .base import Term, as_vector
+from .program import Block
 
 
 class Position(Term):
-    """``‖p_frame(x) − target‖₂`` [m], with ``p_frame`` and ``target`` in the world frame."""
+    """``‖p_frame(x) − target‖₂`` [m], with ``p_frame`` and ``target`` in the world frame.
 
-    is_task = True
+    Residual ``p_frame(x) − target`` (3,) [m]; a task term held to the linear tolerance.
+    """
+
+    level = "task"
 
     def __init__(self, frame: str, target: Sequence[float], *, name: str | None = None):
         self.frame = frame
         self.frames = (frame,)
-        self.target = as_vector(target, 3, f"position target of {frame!r}")
         self.name = name or f"position[{frame}]"
+        self.set_target(target)
 
-    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
-        return np.linalg.norm(poses.position(self.frame) - self.target, axis=-1)
+    def set_target(self, target: Sequence[float]) -> None:
+        """Move the target point ``(3,)`` [m, world] (a problem holding the term re-reads it)."""
+        self.target = as_vector(target, 3, f"position target of {self.frame!r}")
+        self._touch()
 
-    def bind(self, robot: Robot):
-        target = self.target
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        return (Block(B.POSITION, B.NORM, 3, self.frames, self.target, tolerance=B.TOL_LINEAR),)
 
-        def value(X: np.ndarray, poses: FramePoses) -> np.ndarray:
-            return row_norms(poses.position(self.frame) - target)
+    def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
+        return {self.frame: self.target}
 
-        return value
-
-    def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        return local.placement(self.frame).translation - self.target
-
-    def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        return local.frame_jacobian(self.frame)[:3]
+    def __repr__(self) -> str:
+        return f"Position({self.frame!r}, {np.round(self.target, 6).tolist()})"

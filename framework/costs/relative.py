@@ -6,38 +6,34 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..kinematics import FramePoses
 from ..robot import Robot
-from .base import LocalKinematics, Term, as_vector, row_norms
+from . import blocks as B
+from .base import Term, as_vector
+from .program import Block
 
 
 class RelativePosition(Term):
     """``‖p_b(x) − (p_a(x) + offset)‖₂`` [m]: frame ``b`` held at ``offset`` (world axes) from frame ``a``.
 
     With a fixed target for ``a`` this is paper 000's coordinated task ``t*_b = t*_a + t_r``, expressed on the
-    actual position of ``a`` (paper 001's relative-position error of arm B).
+    actual position of ``a`` (paper 001's relative-position error of arm B). Residual ``p_b − p_a − offset``.
     """
 
-    is_task = True
+    level = "task"
 
     def __init__(self, frame_a: str, frame_b: str, offset: Sequence[float], *, name: str | None = None):
         self.frame_a, self.frame_b = frame_a, frame_b
         self.frames = (frame_a, frame_b)
-        self.offset = as_vector(offset, 3, f"relative offset of {frame_b!r} from {frame_a!r}")
         self.name = name or f"relative[{frame_a}->{frame_b}]"
+        self.set_target(offset)
 
-    def value(self, robot: Robot, X: np.ndarray, poses: FramePoses) -> np.ndarray:
-        r = poses.position(self.frame_b) - poses.position(self.frame_a) - self.offset
-        return np.linalg.norm(r, axis=-1)
+    def set_target(self, offset: Sequence[float]) -> None:
+        """Change the offset ``(3,)`` [m, world axes] of frame ``b`` from frame ``a``."""
+        self.offset = as_vector(offset, 3, f"relative offset of {self.frame_b!r} from {self.frame_a!r}")
+        self._touch()
 
-    def bind(self, robot: Robot):
-        def value(X: np.ndarray, poses: FramePoses) -> np.ndarray:
-            return row_norms(poses.position(self.frame_b) - poses.position(self.frame_a) - self.offset)
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        return (Block(B.RELATIVE, B.NORM, 3, self.frames, self.offset, tolerance=B.TOL_LINEAR),)
 
-        return value
-
-    def residual(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        return local.placement(self.frame_b).translation - local.placement(self.frame_a).translation - self.offset
-
-    def jacobian(self, robot: Robot, x: np.ndarray, local: LocalKinematics) -> np.ndarray:
-        return local.frame_jacobian(self.frame_b)[:3] - local.frame_jacobian(self.frame_a)[:3]
+    def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
+        return {self.frame_b: robot.frame_poses(x, self.frame_a).positions[0, 0] + self.offset}

@@ -22,11 +22,29 @@ from framework.solvers import (  # noqa: F401
     tlbo,
     woa,
 )
+from framework.solvers import hybrid, multistart  # noqa: F401  (IK solvers on the local engine)
 from framework.solvers.base import Algorithm, Box, OptimizeResult, minimize, repair
-from framework.solvers.registry import SOLVERS, available_solvers, get_solver, register
+from framework.solvers.ik import IKSolver, Outcome, Request
+from framework.solvers.registry import (
+    IK_SOLVERS,
+    SOLVERS,
+    available_solvers,
+    get_solver,
+    ik_solver,
+    register,
+    register_ik,
+    solver_names,
+)
 
 __all__ = [
+    "IKSolver",
+    "IK_SOLVERS",
+    "Outcome",
+    "Request",
     "SOLVERS",
+    "ik_solver",
+    "register_ik",
+    "solver_names",
     "Algorithm",
     "Box",
     "OptimizeResult",

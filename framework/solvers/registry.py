@@ -1,7 +1,9 @@
-"""Solver registry: name -> :class:`~framework.solvers.base.Algorithm` subclass.
+"""Solver registry: metaheuristics (name -> :class:`~framework.solvers.base.Algorithm` subclass, minimizing a
+population cost) and IK solvers (name -> :class:`~framework.solvers.ik.IKSolver` subclass, solving a problem).
 
-Adding a solver is one new module whose class is decorated with ``@register("name")`` plus one import
-line in ``framework/solvers/__init__.py``.
+Adding a solver is one new module whose class is decorated with ``@register("name")`` (a metaheuristic) or
+``@register_ik("name")`` plus one import line in ``framework/solvers/__init__.py``. Every metaheuristic is also
+an IK solver (:class:`~framework.solvers.metaheuristic.Metaheuristic`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ A = TypeVar("A", bound="type[Algorithm]")
 
 #: Registered solvers, name -> algorithm class.
 SOLVERS: dict[str, type[Algorithm]] = {}
+#: Registered problem-level IK solvers, name -> class.
+IK_SOLVERS: dict[str, type] = {}
 
 
 def register(name: str) -> Callable[[A], A]:
@@ -44,3 +48,32 @@ def get_solver(name: str) -> type[Algorithm]:
         return SOLVERS[name]
     except (KeyError, TypeError):
         raise SolverError(f"Unknown solver {name!r}; available solvers: {available_solvers()}.") from None
+
+
+def register_ik(name: str) -> Callable[[A], A]:
+    """Class decorator registering an :class:`~framework.solvers.ik.IKSolver` under ``name``."""
+
+    def decorate(cls):
+        if name in IK_SOLVERS or name in SOLVERS:
+            raise SolverError(f"Solver name {name!r} is already registered.")
+        cls.name = name
+        IK_SOLVERS[name] = cls
+        return cls
+
+    return decorate
+
+
+def solver_names() -> list[str]:
+    """Every name :func:`framework.solve` accepts: the IK solvers, then the metaheuristics."""
+    return sorted(IK_SOLVERS) + sorted(SOLVERS)
+
+
+def ik_solver(name: str, options=None):
+    """An IK solver instance for ``name`` with ``options``; raises :class:`SolverError` listing the names."""
+    if name in IK_SOLVERS:
+        return IK_SOLVERS[name](options)
+    if name in SOLVERS:
+        from .metaheuristic import Metaheuristic
+
+        return Metaheuristic(name, options)
+    raise SolverError(f"unknown solver {name!r}; available: {', '.join(solver_names())}")

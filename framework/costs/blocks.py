@@ -1,0 +1,292 @@
+"""Residual blocks: the compiled definition of every standard cost term.
+
+A term is one or more *blocks*. A block is a residual ``r(x)`` (a few rows) with its Jacobian ``dr/dx`` from the
+frame Jacobians, its second-order part (for Newton steps of the engine), and a *ρ* that turns the residual into
+the term's value (``‖r‖``, ``sin(‖r‖/2)``, ``Σ|r|``, ``‖r‖²``, times a scale). The term's value is the sum of its
+blocks' ρ. Kinds:
+
+==============  ============================================  ==========================  =======================
+kind            residual                                      Jacobian                    parameters
+==============  ============================================  ==========================  =======================
+``POSITION``    ``p_a − t`` (3) [m]                           ``J_p,a``                   ``t`` (3)
+``ORIENTATION`` ``log(R_tᵀ R_a)`` (3) [rad], norm = angle      ``J_l⁻¹(r) R_tᵀ J_ω,a``     ``R_t`` (9, row-major)
+``RELATIVE``    ``p_b − p_a − o`` (3) [m]                     ``J_p,b − J_p,a``           ``o`` (3)
+``COORDINATES`` ``x[idx] − x₀`` (wrapped on continuous axes)  unit rows                   ``x₀`` (count)
+``LIMITS``      ``min(0, x − l) + max(0, x − u)`` (n)         ``±1`` outside, 0 inside    ``l`` (n), ``u`` (n)
+==============  ============================================  ==========================  =======================
+
+Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
+coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+# Block kinds
+POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS = 0, 1, 2, 3, 4
+# ρ kinds: how the residual becomes the value
+NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
+# Tolerance classes: which tolerance a task block's error ‖r‖ is held to
+TOL_NONE, TOL_LINEAR, TOL_ANGULAR = 0, 1, 2
+# Levels: 0 value only (penalties the box already enforces), 1 task (reached first), 2 regularizer (minimized on the task)
+LEVEL_VALUE, LEVEL_TASK, LEVEL_REGULARIZER = 0, 1, 2
+# Columns of bint
+KIND, RHO, TOL, LEVEL, ROWS, FA, FB, PPTR, IPTR, TERM, COUNT = range(11)
+# Columns of bflt
+WEIGHT, SCALE = 0, 1
+
+TWO_PI = 2.0 * np.pi
+
+
+@numba.njit(cache=True, inline="always")
+def wrap_angle(d):
+    """``d`` wrapped to ``[−π, π)``."""
+    return d - TWO_PI * np.floor((d + np.pi) / TWO_PI)
+
+
+@numba.njit(cache=True)
+def rotation_log(E, r) -> float:
+    """``r = log(E)`` (3,) of a rotation ``E`` (9, row-major); returns the angle ``‖r‖`` in ``[0, π]``.
+
+    Accurate at every angle: the angle from ``atan2(sin, cos)``, the axis from the skew part except near π,
+    where it comes from the symmetric part ``a aᵀ = (E + Eᵀ − 2c I) / (2(1 − c))`` with its sign from the skew.
+    """
+    c = 0.5 * (E[0] + E[4] + E[8] - 1.0)
+    c = min(1.0, max(-1.0, c))
+    sx, sy, sz = E[7] - E[5], E[2] - E[6], E[3] - E[1]  # 2 sin θ · axis
+    s = 0.5 * np.sqrt(sx * sx + sy * sy + sz * sz)
+    theta = np.arctan2(s, c)
+    if c > -0.9:
+        if theta < 1e-4:
+            k = 0.5 + theta * theta / 12.0  # θ / (2 sin θ)
+        else:
+            k = 0.5 * theta / s
+        r[0], r[1], r[2] = k * sx, k * sy, k * sz
+        return theta
+    d0 = (E[0] - c) / (1.0 - c)
+    d1 = (E[4] - c) / (1.0 - c)
+    d2 = (E[8] - c) / (1.0 - c)
+    if d0 >= d1 and d0 >= d2:
+        a0 = np.sqrt(max(d0, 0.0))
+        a1 = 0.5 * (E[1] + E[3]) / ((1.0 - c) * a0)
+        a2 = 0.5 * (E[2] + E[6]) / ((1.0 - c) * a0)
+    elif d1 >= d2:
+        a1 = np.sqrt(max(d1, 0.0))
+        a0 = 0.5 * (E[1] + E[3]) / ((1.0 - c) * a1)
+        a2 = 0.5 * (E[5] + E[7]) / ((1.0 - c) * a1)
+    else:
+        a2 = np.sqrt(max(d2, 0.0))
+        a0 = 0.5 * (E[2] + E[6]) / ((1.0 - c) * a2)
+        a1 = 0.5 * (E[5] + E[7]) / ((1.0 - c) * a2)
+    norm = np.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+    if a0 * sx + a1 * sy + a2 * sz < 0.0:
+        norm = -norm
+    r[0], r[1], r[2] = theta * a0 / norm, theta * a1 / norm, theta * a2 / norm
+    return theta
+
+
+@numba.njit(cache=True)
+def left_jacobian_inverse(r, L):
+    """``J_l⁻¹(r) = I − ½[r]× + (1/θ² − cot(θ/2)/(2θ)) [r]×²`` (3, 3): ``log(exp(ε) exp(r)) ≈ r + J_l⁻¹ ε``."""
+    t2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+    theta = np.sqrt(t2)
+    if theta < 1e-4:
+        k = 1.0 / 12.0 + t2 / 720.0
+    else:
+        k = 1.0 / t2 - 0.5 / (theta * np.tan(0.5 * theta))
+    # [r]×² = r rᵀ − θ² I
+    for a in range(3):
+        for b in range(3):
+            L[a, b] = k * r[a] * r[b]
+        L[a, a] += 1.0 - k * t2
+    L[0, 1] += 0.5 * r[2]
+    L[0, 2] -= 0.5 * r[1]
+    L[1, 0] -= 0.5 * r[2]
+    L[1, 2] += 0.5 * r[0]
+    L[2, 0] += 0.5 * r[1]
+    L[2, 1] -= 0.5 * r[0]
+
+
+@numba.njit(cache=True, inline="always")
+def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9) -> int:
+    """Residual of block ``b`` into ``r[row:]`` (and its Jacobian into ``Jr[row:]``); returns its row count.
+
+    ``out (k, 12)`` and ``Jf (k, 6, n)`` are the frames' poses and Jacobians at ``x``; ``L3 (3, 3)``, ``E9 (9,)`` scratch.
+    """
+    kind, p, rows = bint[b, KIND], bint[b, PPTR], bint[b, ROWS]
+    fa, fb = bint[b, FA], bint[b, FB]
+    n = x.shape[0]
+    if kind == POSITION:
+        for c in range(3):
+            r[row + c] = out[fa, 9 + c] - params[p + c]
+        if want_jacobian:
+            for c in range(3):
+                for i in range(n):
+                    Jr[row + c, i] = Jf[fa, c, i]
+    elif kind == RELATIVE:
+        for c in range(3):
+            r[row + c] = out[fb, 9 + c] - out[fa, 9 + c] - params[p + c]
+        if want_jacobian:
+            for c in range(3):
+                for i in range(n):
+                    Jr[row + c, i] = Jf[fb, c, i] - Jf[fa, c, i]
+    elif kind == ORIENTATION:
+        E = E9
+        for a in range(3):
+            for c in range(3):  # E = R_tᵀ R
+                E[3 * a + c] = (params[p + a] * out[fa, c] + params[p + 3 + a] * out[fa, 3 + c]
+                                + params[p + 6 + a] * out[fa, 6 + c])
+        rotation_log(E, r[row : row + 3])
+        if want_jacobian:
+            left_jacobian_inverse(r[row : row + 3], L3)
+            for a in range(3):
+                m0 = L3[a, 0] * params[p] + L3[a, 1] * params[p + 1] + L3[a, 2] * params[p + 2]
+                m1 = L3[a, 0] * params[p + 3] + L3[a, 1] * params[p + 4] + L3[a, 2] * params[p + 5]
+                m2 = L3[a, 0] * params[p + 6] + L3[a, 1] * params[p + 7] + L3[a, 2] * params[p + 8]
+                for i in range(n):  # row a of J_l⁻¹ R_tᵀ times J_ω
+                    Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]
+    elif kind == COORDINATES:
+        q = bint[b, IPTR]
+        for c in range(rows):
+            k = idx[q + c]
+            d = x[k] - params[p + c]
+            r[row + c] = wrap_angle(d) if wrap[k] else d
+            if want_jacobian:
+                for i in range(n):
+                    Jr[row + c, i] = 0.0
+                Jr[row + c, k] = 1.0
+    else:  # LIMITS
+        for k in range(n):
+            lo, hi = params[p + k], params[p + n + k]
+            v = x[k]
+            r[row + k] = v - lo if v < lo else (v - hi if v > hi else 0.0)
+            if want_jacobian:
+                for i in range(n):
+                    Jr[row + k, i] = 0.0
+                Jr[row + k, k] = 1.0 if (v < lo or v > hi) else 0.0
+    return rows
+
+
+@numba.njit(cache=True)
+def rho_value(rho, scale, r, row, rows) -> float:
+    """The value of a block from its residual ``r[row:row + rows]``."""
+    if rho == L1:
+        s = 0.0
+        for c in range(rows):
+            s += abs(r[row + c])
+        return scale * s
+    s = 0.0
+    for c in range(rows):
+        s += r[row + c] * r[row + c]
+    if rho == SQUARED:
+        return scale * s
+    norm = np.sqrt(s)
+    if rho == HALFSIN:
+        return scale * np.sin(0.5 * min(norm, np.pi))
+    return scale * norm
+
+
+@numba.njit(cache=True)
+def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H):
+    """Gradient ``g (rows,)`` and Hessian ``H (rows, rows)`` of the block value with respect to its residual.
+
+    The norm-like ρ are not differentiable at ``r = 0``; there they are smoothed as ``√(‖r‖² + ε²)`` (``|r|`` per
+    component for L1) with ``ε = smoothing``, which changes the value by at most ``scale · ε`` per block.
+    """
+    for a in range(rows):
+        for c in range(rows):
+            H[a, c] = 0.0
+    if rho == SQUARED:
+        for a in range(rows):
+            g[a] = 2.0 * scale * r[row + a]
+            H[a, a] = 2.0 * scale
+        return
+    if rho == L1:
+        e2 = smoothing * smoothing
+        for a in range(rows):
+            v = r[row + a]
+            d = np.sqrt(v * v + e2)
+            g[a] = scale * v / d
+            H[a, a] = scale * e2 / (d * d * d)
+        return
+    s = 0.0
+    for a in range(rows):
+        s += r[row + a] * r[row + a]
+    if rho == NORM:
+        d = np.sqrt(s + smoothing * smoothing)
+        for a in range(rows):
+            g[a] = scale * r[row + a] / d
+            for c in range(rows):
+                H[a, c] = -scale * r[row + a] * r[row + c] / (d * d * d)
+            H[a, a] += scale / d
+        return
+    # HALFSIN: ρ = s sin(φ/2), φ = ‖r‖ (smoothed): ∇ρ = ½ s cos(φ/2) u, ∇²ρ = s[½cos(φ/2)/φ (I − uuᵀ) − ¼ sin(φ/2) uuᵀ]
+    phi = np.sqrt(s + smoothing * smoothing)
+    c1 = 0.5 * scale * np.cos(0.5 * phi)
+    c2 = 0.25 * scale * np.sin(0.5 * phi)
+    for a in range(rows):
+        ua = r[row + a] / phi
+        g[a] = c1 * ua
+        for c in range(rows):
+            uc = r[row + c] / phi
+            H[a, c] = -(c1 / phi + c2) * ua * uc
+        H[a, a] += c1 / phi
+
+
+@numba.njit(cache=True)
+def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, H):
+    """Add ``Σ_c mu_c ∇²r_c`` of block ``b`` (multipliers ``mu (rows,)``) to ``H (n, n)``.
+
+    From the product of exponentials at ``x``: with ``ω_i`` the world axis of coordinate ``i`` (zero for
+    translations) and ``J_i`` its column of the frame's position Jacobian, for ``i`` before ``j`` on the frame's
+    chain ``∂²p/∂x_i∂x_j = ω_i × J_j`` (also on the diagonal), and the rotation vector's second derivative is
+    ``½ ω_i × ω_j`` (zero on the diagonal) — exact for positions, exact for orientations on the target (``r = 0``).
+    """
+    kind = bint[b, KIND]
+    if kind == COORDINATES or kind == LIMITS:
+        return
+    if kind == ORIENTATION:
+        p, fa = bint[b, PPTR], bint[b, FA]
+        L = np.empty((3, 3))
+        left_jacobian_inverse(r[row : row + 3], L)
+        v = np.empty(3)  # μ' = R_t J_l⁻ᵀ μ
+        for a in range(3):
+            v[a] = L[0, a] * mu[0] + L[1, a] * mu[1] + L[2, a] * mu[2]
+        m0 = params[p] * v[0] + params[p + 1] * v[1] + params[p + 2] * v[2]
+        m1 = params[p + 3] * v[0] + params[p + 4] * v[1] + params[p + 5] * v[2]
+        m2 = params[p + 6] * v[0] + params[p + 7] * v[1] + params[p + 8] * v[2]
+        lo, hi = chain_ptr[fa], chain_ptr[fa + 1]
+        for s in range(lo, hi):
+            i = chain_idx[s]
+            wx, wy, wz = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+            if wx == 0.0 and wy == 0.0 and wz == 0.0:
+                continue
+            for t in range(s + 1, hi):
+                j = chain_idx[t]
+                vx, vy, vz = Jf[fa, 3, j], Jf[fa, 4, j], Jf[fa, 5, j]
+                h = 0.5 * (m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx))
+                H[i, j] += h
+                H[j, i] += h
+        return
+    frames = (bint[b, FA], bint[b, FB]) if kind == RELATIVE else (bint[b, FA], -1)
+    for which in range(2):
+        f = frames[which]
+        if f < 0:
+            continue
+        sign = -1.0 if (kind == RELATIVE and which == 0) else 1.0
+        m0, m1, m2 = sign * mu[0], sign * mu[1], sign * mu[2]
+        lo, hi = chain_ptr[f], chain_ptr[f + 1]
+        for s in range(lo, hi):
+            i = chain_idx[s]
+            wx, wy, wz = Jf[f, 3, i], Jf[f, 4, i], Jf[f, 5, i]
+            if wx == 0.0 and wy == 0.0 and wz == 0.0:
+                continue
+            for t in range(s, hi):
+                j = chain_idx[t]
+                vx, vy, vz = Jf[f, 0, j], Jf[f, 1, j], Jf[f, 2, j]
+                h = m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx)
+                H[i, j] += h
+                if j != i:
+                    H[j, i] += h

@@ -1,0 +1,174 @@
+"""Compiled evaluation of a packed problem: values of a population, residuals and Jacobians at one configuration.
+
+The arguments are the packed arrays of :class:`~framework.costs.program.Program`, grouped as tuples:
+``kin = (jint, jgeo, fslot, fgeo)`` (the kinematic tables), ``prog = (bint, bflt, params, idx, wrap, chain_ptr,
+chain_idx)`` (the blocks) and a workspace ``ws = (out, W, Jf, r, Jr, L3, E9)`` from :func:`workspace`.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..kinematics import _fk_one, frame_jacobians
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
+from .blocks import (
+    LEVEL,
+    RHO,
+    ROWS,
+    SCALE,
+    TERM,
+    TOL,
+    TOL_ANGULAR,
+    TOL_LINEAR,
+    WEIGHT,
+    block_residual,
+    rho_value,
+)
+
+
+@numba.njit(cache=True)
+def workspace(kin, prog, n):
+    """Scratch arrays for one configuration: poses, joint placements, frame Jacobians, residual rows."""
+    jint, fslot = kin[0], kin[2]
+    bint = prog[0]
+    rows = 0
+    for b in range(bint.shape[0]):
+        rows += bint[b, ROWS]
+    rows = max(rows, 1)
+    k = fslot.shape[0]
+    return (np.empty((k, 12)), np.empty((jint.shape[0], 12)), np.zeros((k, 6, n)), np.empty(rows),
+            np.zeros((rows, n)), np.empty((3, 3)), np.empty(9))
+
+
+@numba.njit(cache=True, inline="always")
+def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
+    """Residuals (and Jacobians) of the blocks of ``level`` at ``x``, stacked into ``ws`` rows; returns the rows.
+
+    ``level < 0`` selects every block of level 1 and 2 (the task and the regularizers). ``kinematics``:
+    0 reuses the poses and frame Jacobians in ``ws`` (computed at the same ``x``); 1 computes the poses (and,
+    with ``want_jacobian``, the frame Jacobians); 2 keeps the poses and computes the frame Jacobians from them
+    (after a call with ``kinematics=1, want_jacobian=False`` at the same ``x``: a step that was accepted).
+    """
+    jint, jgeo, fslot, fgeo = kin
+    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
+    out, W, Jf, r, Jr, L3, E9 = ws
+    if kinematics == 1:
+        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+    if want_jacobian and kinematics >= 1:
+        frame_jacobians(x, jint, jgeo, fslot, out, W, Jf)
+    row = 0
+    for b in range(bint.shape[0]):
+        lv = bint[b, LEVEL]
+        if (level >= 0 and lv != level) or (level < 0 and lv == 0):
+            continue
+        row += block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9)
+    return row
+
+
+@numba.njit(cache=True)
+def level_value(level, prog, r, weighted) -> float:
+    """Σ ρ_b (times the term weights if ``weighted``) over the blocks of ``level`` from stacked residuals ``r``."""
+    bint, bflt = prog[0], prog[1]
+    row, total = 0, 0.0
+    for b in range(bint.shape[0]):
+        lv = bint[b, LEVEL]
+        if (level >= 0 and lv != level) or (level < 0 and lv == 0):
+            continue
+        rows = bint[b, ROWS]
+        v = rho_value(bint[b, RHO], bflt[b, SCALE], r, row, rows)
+        total += bflt[b, WEIGHT] * v if weighted else v
+        row += rows
+    return total
+
+
+@numba.njit(cache=True)
+def within_tolerance(prog, r, tol_linear, tol_angular) -> bool:
+    """Whether every task block's error ``‖r_b‖`` is within its tolerance (m or rad), from stacked task rows."""
+    bint = prog[0]
+    row = 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != 1:
+            continue
+        rows = bint[b, ROWS]
+        s = 0.0
+        for c in range(rows):
+            s += r[row + c] * r[row + c]
+        tol = bint[b, TOL]
+        if tol == TOL_LINEAR and not np.sqrt(s) <= tol_linear:
+            return False
+        if tol == TOL_ANGULAR and not np.sqrt(s) <= tol_angular:
+            return False
+        row += rows
+    return True
+
+
+@numba.njit(cache=True)
+def task_errors(prog, r, errors):
+    """Each task block's error ``‖r_b‖`` (m or rad) into ``errors``, from stacked task rows."""
+    bint = prog[0]
+    row, k = 0, 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != 1:
+            continue
+        rows = bint[b, ROWS]
+        s = 0.0
+        for c in range(rows):
+            s += r[row + c] * r[row + c]
+        errors[k] = np.sqrt(s)
+        k += 1
+        row += rows
+
+
+@numba.njit(cache=True)
+def population_values(X, kin, prog, V) -> int:
+    """Unweighted term values ``V (pop, terms)`` (accumulated: zero it first) of every compiled block.
+
+    Returns the first row of ``X`` holding NaN or inf (left unevaluated), or -1.
+    """
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    X, V = borrow(X), borrow(V)
+    jint, jgeo, fslot, fgeo = kin
+    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
+    n = X.shape[1]
+    own = workspace(kin, prog, n)
+    out, W, Jf, r, Jr, L3, E9 = borrow_ws(own)
+    bad = -1
+    for m in range(X.shape[0]):
+        x = X[m]
+        for i in range(n):
+            if not np.isfinite(x[i]):
+                bad = m
+        if bad >= 0:
+            break
+        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+        for b in range(bint.shape[0]):
+            rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
+            V[m, bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+    keep_alive(own)
+    return bad
+
+
+@numba.njit(cache=True)
+def residuals_at(x, level, kin, prog, r_out, J_out) -> int:
+    """Residuals ``r_out`` and Jacobians ``J_out`` (preallocated with every block's rows) of the blocks of
+    ``level`` at ``x`` (``-1``: levels 1 and 2); returns the number of rows written."""
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    own = workspace(kin, prog, x.shape[0])
+    ws = borrow_ws(own)
+    m = linearize(borrow(x), level, kin, prog, ws, True, 1)
+    r_out[:m] = ws[3][:m]
+    J_out[:m] = ws[4][:m]
+    keep_alive(own)
+    return m
+
+
+@numba.njit(cache=True)
+def task_errors_at(x, kin, prog, errors):
+    """Each task block's error ``‖r_b‖`` [m or rad] at ``x`` into ``errors``."""
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    own = workspace(kin, prog, x.shape[0])
+    ws = borrow_ws(own)
+    linearize(borrow(x), 1, kin, prog, ws, False, 1)
+    task_errors(prog, ws[3], errors)
+    keep_alive(own)

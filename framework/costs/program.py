@@ -1,0 +1,230 @@
+"""A weighted objective packed for the compiled kernels: the kinematic tables of its frames and its blocks.
+
+:class:`Program` is built once per problem. Targets can change afterwards without rebuilding it: a term whose
+target was set in place (``term.set_target(...)``) is re-packed on the next :meth:`Program.refresh`, which
+costs a few microseconds, so tracking moves one problem along a path instead of building one per waypoint.
+Terms without blocks (user terms written in numpy) are evaluated by their own ``value`` beside the kernel.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+from typing import TYPE_CHECKING, NamedTuple
+
+import numpy as np
+
+from ..errors import TaskError
+from ..robot import JointKind, Robot
+from . import blocks as B
+from .kernels import population_values
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .base import Objective, Term
+
+_LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_REGULARIZER}
+
+
+class Block(NamedTuple):
+    """One residual block of a term (see :mod:`framework.costs.blocks` for the kinds).
+
+    Attributes:
+        kind: ``POSITION``, ``ORIENTATION``, ``RELATIVE``, ``COORDINATES`` or ``LIMITS``.
+        rho: how the residual becomes the value: ``NORM``, ``HALFSIN``, ``L1`` or ``SQUARED``.
+        rows: residual size.
+        frames: the frames it reads (``a`` then ``b``).
+        params: its target parameters (position, row-major rotation, offset, previous values, limits).
+        indices: coordinates of a ``COORDINATES`` block.
+        scale: factor of ρ (``1 / (n π)`` for paper 002's normalized L1 motion, δ for the limit penalty).
+        tolerance: ``TOL_LINEAR`` [m], ``TOL_ANGULAR`` [rad] or ``TOL_NONE``: which tolerance ``‖r‖`` is held to.
+    """
+
+    kind: int
+    rho: int
+    rows: int
+    frames: tuple[str, ...] = ()
+    params: np.ndarray = np.zeros(0)
+    indices: np.ndarray | None = None
+    scale: float = 1.0
+    tolerance: int = B.TOL_NONE
+
+    def signature(self) -> tuple:
+        """Everything but the parameters' values: blocks of equal signatures pack into the same layout."""
+        indices = None if self.indices is None else self.indices.tobytes()
+        return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, np.size(self.params),
+                indices)
+
+
+def _kind(level: int, blocks: tuple[Block, ...] | None) -> str:
+    """What a term measures, for reports: ``"position"`` (all its blocks in metres), ``"orientation"`` (all in
+    radians), ``"motion"`` (a regularizer), ``"other"``."""
+    tolerances = {b.tolerance for b in blocks or ()}
+    if level == B.LEVEL_TASK and tolerances == {B.TOL_LINEAR}:
+        return "position"
+    if level == B.LEVEL_TASK and tolerances == {B.TOL_ANGULAR}:
+        return "orientation"
+    if level == B.LEVEL_REGULARIZER and blocks:
+        return "motion"
+    return "other"
+
+
+def wrapping_coordinates(robot: Robot) -> np.ndarray:
+    """``(n,)`` True for coordinates that are angles without end stops (continuous joints, planar θ)."""
+    mask = np.zeros(robot.n, dtype=bool)
+    for joint in robot.joints:
+        if joint.kind is JointKind.CONTINUOUS:
+            mask[joint.index] = True
+        elif joint.kind is JointKind.PLANAR:
+            mask[joint.index + 2] = True
+    return mask
+
+
+class _Layout:
+    """What a program's arrays hold apart from targets and weights: frames, kinematic tables, block table.
+
+    Shared by every problem with the same terms (kinds, frames, coordinates) on the same robot.
+    """
+
+    def __init__(self, robot: Robot, levels: list[int], packed: list[tuple[Block, ...] | None]):
+        frames = list(dict.fromkeys(f for p in packed if p for block in p for f in block.frames))
+        self.frames = tuple(frames)
+        kinematics = robot._kinematics(self.frames)
+        self.kin = kinematics.tables
+        self.chains = kinematics.chains
+        slot = {f: i for i, f in enumerate(frames)}
+        rows, indices, scales, self.block_term = [], [], [], []
+        self.references: list[tuple[slice, slice]] = []  # (params, idx) of the regularizers' COORDINATES blocks
+        pptr = iptr = 0
+        for k, (level, blocks) in enumerate(zip(levels, packed)):
+            for block in blocks or ():
+                count = 0
+                if block.kind == B.COORDINATES:
+                    indices.append(np.asarray(block.indices, dtype=np.int64))
+                    count = indices[-1].size
+                size = int(np.size(block.params))
+                fa = slot[block.frames[0]] if block.frames else -1
+                fb = slot[block.frames[1]] if len(block.frames) > 1 else -1
+                rows.append([block.kind, block.rho, block.tolerance, level, block.rows, fa, fb, pptr, iptr, k, count])
+                self.block_term.append(k)
+                scales.append(block.scale)
+                if block.kind == B.COORDINATES and level == B.LEVEL_REGULARIZER:
+                    self.references.append((slice(pptr, pptr + size), slice(iptr, iptr + count)))
+                pptr += size
+                iptr += count
+        self.bint = np.array(rows, dtype=np.int64).reshape(-1, 11)
+        self.block_term = np.array(self.block_term, dtype=np.int64)
+        self.scales = np.array(scales, dtype=float)
+        self.idx = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int64)
+        self.params_size = pptr
+        self.wrap = wrapping_coordinates(robot)
+        task = self.bint[:, B.LEVEL] == B.LEVEL_TASK
+        self.task_tolerances = self.bint[task, B.TOL]
+        self.task_block_rows = self.bint[task, B.ROWS]
+        self.levels_present = frozenset(self.bint[:, B.LEVEL].tolist())
+        self.term_kinds = tuple(_kind(level, blocks) for level, blocks in zip(levels, packed))
+        self.task_angular = self.task_tolerances == B.TOL_ANGULAR
+        self.task_rows = int(self.task_block_rows.sum())
+        self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
+
+
+class Program:
+    """An objective's terms as packed arrays for :mod:`framework.costs.kernels` and the local engine.
+
+    Attributes:
+        kin: ``(jint, jgeo, fslot, fgeo)``, the population-FK tables of every frame the blocks read.
+        prog: ``(bint, bflt, params, idx, wrap, chain_ptr, chain_idx)``, the blocks.
+        compiled: ``(terms,)`` True for terms evaluated by the kernel.
+        task_blocks: a name for each task block's error, in block order (``"position[ee]"``, ...).
+    """
+
+    def __init__(self, robot: Robot, objective: Objective):
+        self.robot = robot
+        self.terms: tuple[Term, ...] = tuple(t for _, t in objective)
+        self.weights = np.array([w for w, _ in objective], dtype=float)
+        packed = [t.blocks(robot) for t in self.terms]
+        key = ("layout", tuple((t.level, None if p is None else tuple(b.signature() for b in p))
+                               for t, p in zip(self.terms, packed)))
+        layout = robot._cache.get(key)
+        if layout is None:
+            layout = robot._cache[key] = _Layout(robot, [_LEVELS[t.level] for t in self.terms], packed)
+        self.layout = layout
+        self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
+        flat = [b.params for p in packed if p for b in p]
+        params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
+        bflt = np.empty((layout.scales.size, 2))
+        bflt[:, 0] = self.weights[layout.block_term]
+        bflt[:, 1] = layout.scales
+        self.prog = (layout.bint, bflt, params, layout.idx, layout.wrap, *layout.chains)
+        self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
+        self.task_angular = layout.task_angular
+        self.task_rows = layout.task_rows
+        self.term_kinds = layout.term_kinds
+        self.compiled = np.array([p is not None for p in packed])
+        self._versions = [t.version for t in self.terms]
+        self._generic = [k for k, p in enumerate(packed) if p is None]
+
+    def reference(self, x: np.ndarray) -> bool:
+        """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they
+        cover); returns whether there is any."""
+        params, idx = self.prog[2], self.prog[3]
+        for p, i in self.layout.references:
+            x[idx[i]] = params[p]
+        return bool(self.layout.references)
+
+    @cached_property
+    def task_blocks(self) -> tuple[str, ...]:
+        """A name for each task block's error, in block order (``name.distance`` / ``name.angle`` for terms of
+        several blocks)."""
+        names = []
+        for term in self.terms:
+            blocks = term.blocks(self.robot) if term.level == "task" else None
+            for block in blocks or ():
+                suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
+                names.append(term.name + (suffix if len(blocks) > 1 else ""))
+        return tuple(names)
+
+    @property
+    def levels(self) -> np.ndarray:
+        """``(terms,)`` level of each term (0 value only, 1 task, 2 regularizer)."""
+        return np.array([_LEVELS[t.level] for t in self.terms])
+
+    def has_level(self, level: int) -> bool:
+        """Whether any compiled block is at ``level``."""
+        return level in self.layout.levels_present
+
+    def refresh(self) -> None:
+        """Re-pack the parameters of terms whose targets changed since the last call (a few µs)."""
+        for k, term in enumerate(self.terms):
+            if term.version != self._versions[k]:
+                self._versions[k] = term.version
+                bint, params = self.prog[0], self.prog[2]
+                rows = np.flatnonzero(bint[:, B.TERM] == k)
+                for b, block in zip(rows, term.blocks(self.robot) or ()):
+                    start = bint[b, B.PPTR]
+                    value = np.ravel(block.params)
+                    params[start : start + value.size] = value
+
+    def values(self, X: np.ndarray) -> np.ndarray:
+        """``(pop, terms)`` unweighted values of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
+        self.refresh()
+        V = np.zeros((X.shape[0], len(self.terms)))
+        bad = population_values(X, self.kin, self.prog, V)
+        if bad >= 0:
+            from ..errors import ConfigurationError
+
+            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        if self._generic:
+            frames = tuple(dict.fromkeys(f for k in self._generic for f in self.terms[k].frames))
+            poses = self.robot.frame_poses(X, frames) if frames else None
+            for k in self._generic:
+                V[:, k] = self.terms[k].value(self.robot, X, poses)
+        return V
+
+
+def coordinates_block(indices: Sequence[int], previous: np.ndarray, rho: int, scale: float = 1.0) -> Block:
+    """A ``COORDINATES`` block ``x[indices] − previous`` (differences of continuous joints wrapped)."""
+    indices = np.asarray(indices, dtype=np.int64)
+    if indices.size == 0:
+        raise TaskError("a joint-space term needs at least one coordinate")
+    return Block(B.COORDINATES, rho, int(indices.size), params=np.asarray(previous, dtype=float),
+                 indices=indices, scale=scale)

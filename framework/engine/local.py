@@ -1,0 +1,268 @@
+"""The local engine's Python face: one call runs reach → regularize on a packed problem.
+
+:func:`solve_local` is the one local solver of the framework. It reaches the task (level-1 terms) by
+Levenberg-Marquardt with random restarts (:mod:`~framework.engine.reach`), then, when the problem has
+regularizers (level-2 terms, e.g. motion), minimizes them without leaving the task
+(:func:`~framework.engine.newton.regularize`). Everything runs in compiled code; this module only draws the
+restart configurations from the caller's generator, converts the time budget into a deadline, and names the
+outcome. :func:`residuals` gives the stacked residuals and Jacobians at one configuration (for predictors,
+task covariances and tests).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from ..costs.blocks import HALFSIN, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, RHO, ROWS, SCALE, WEIGHT
+from ..costs.kernels import residuals_at, task_errors_at
+from ..costs.program import Program
+from ..errors import SolverError
+from . import newton
+from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
+
+#: Restart configurations drawn per call of the compiled loop (more are drawn while the budget lasts).
+RESTART_BATCH = 32
+_REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
+                      newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
+
+
+@dataclass(frozen=True)
+class LocalSettings:
+    """Settings of :func:`solve_local`.
+
+    Attributes:
+        tolerance: every position-like task block (position, relative position) within this [m].
+        angle_tolerance: every orientation block within this [rad] (default: ``tolerance``).
+        max_iterations: Levenberg-Marquardt iterations over all restarts.
+        stall: iterations without 2 % progress of ``‖r‖²`` before a restart from a random configuration.
+        restarts: whether to restart at all (``False``: one descent from the start).
+        time_budget: seconds for the whole solve (checked inside the compiled loops), or ``None``.
+        polish: Gauss-Newton steps after reaching the tolerance, kept while they lower ``‖r‖``.
+        regularize: minimize the level-2 terms on the task after reaching it.
+        regularize_iterations: Newton iterations of that phase.
+        smoothing: ``ε`` of the norm-like ρ at zero during the Newton phase (see ``rho_derivatives``).
+    """
+
+    tolerance: float = 1e-9
+    angle_tolerance: float | None = None
+    max_iterations: int = 1000
+    stall: int = 12
+    restarts: bool = True
+    time_budget: float | None = None
+    polish: int = 2
+    regularize: bool = True
+    regularize_iterations: int = 60
+    smoothing: float = 1e-10
+
+    def __post_init__(self) -> None:
+        for name in ("tolerance", "smoothing"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise SolverError(f"local engine: {name} must be a positive number; got {value!r}")
+        if self.angle_tolerance is not None and not (np.isfinite(self.angle_tolerance) and self.angle_tolerance > 0):
+            raise SolverError(f"local engine: angle_tolerance must be a positive number; got {self.angle_tolerance!r}")
+        for name in ("max_iterations", "stall", "polish", "regularize_iterations"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= 0):
+                raise SolverError(f"local engine: {name} must be an integer >= 0; got {value!r}")
+        if self.time_budget is not None and not (np.isfinite(self.time_budget) and self.time_budget > 0):
+            raise SolverError(f"local engine: time_budget must be a positive number of seconds; got {self.time_budget!r}")
+
+    @property
+    def angular(self) -> float:
+        return self.tolerance if self.angle_tolerance is None else self.angle_tolerance
+
+
+class LocalResult(NamedTuple):
+    """Outcome of :func:`solve_local`.
+
+    Attributes:
+        x: ``(n,)`` the configuration (the reached one, else the closest to the task seen).
+        reached: every task block within its tolerance.
+        status: ``"reached"``, ``"max_iterations"``, ``"time_budget"``, or ``"no_task"``.
+        task_errors: ``(blocks,)`` each task block's error ``‖r‖`` [m or rad] at ``x``.
+        iterations, evaluations, restarts: Levenberg-Marquardt iterations, residual evaluations (both phases),
+            restarts from random configurations.
+        regularized: status of the regularizer phase (``"converged"``, ``"stalled"``, ...; ``None`` if not run).
+        multipliers: ``(rows,)`` the task's Lagrange multipliers after that phase (``None`` if not run).
+    """
+
+    x: np.ndarray
+    reached: bool
+    status: str
+    task_errors: np.ndarray
+    iterations: int
+    evaluations: int
+    restarts: int
+    regularized: str | None = None
+    multipliers: np.ndarray | None = None
+
+
+def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(lower, upper, box_wrap)``: the robot's box and which coordinates wrap around instead of stopping."""
+    return program.robot.lower, program.robot.upper, program.layout.box_wrap
+
+
+def solve_local(
+    program: Program,
+    x0: np.ndarray,
+    rng: np.random.Generator | Callable[[], np.random.Generator],
+    settings: LocalSettings = LocalSettings(),
+    *,
+    deadline: float | None = None,
+) -> LocalResult:
+    """Reach the task from ``x0`` (restarting from uniform random configurations), then regularize on it.
+
+    Args:
+        program: the packed problem (:attr:`framework.problem.Problem.program`).
+        x0: ``(n,)`` first start (float64).
+        rng: draws the restart configurations (a callable returning the generator is called only when a
+            restart is needed).
+        settings: tolerances, budgets and phases.
+        deadline: ``time.monotonic()`` at which to stop (overrides ``settings.time_budget``).
+    """
+    program.refresh()
+    lower, upper, box_wrap = search_box(program)
+    x = np.array(x0, dtype=float)
+    if deadline is None and settings.time_budget is not None:
+        deadline = time.monotonic() + settings.time_budget
+    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    stats = np.zeros(3, dtype=np.int64)
+    errors = np.zeros(program.task_block_rows.size)
+    iterations = evaluations = restarts = 0
+    code = REACHED
+    if program.task_rows:
+        best, best_errors = x, None
+        starts = np.zeros((0, x.size))  # the first descent needs no random numbers: draw them when it stalls
+        while True:
+            code = reach(x, starts, lower, upper, box_wrap, program.kin, program.prog, settings.tolerance,
+                         settings.angular, settings.max_iterations - iterations, settings.stall, deadline_ns,
+                         settings.polish, errors, stats)
+            iterations, evaluations, restarts = iterations + stats[0], evaluations + stats[1], restarts + stats[2]
+            if code == REACHED:
+                best, best_errors = x, errors
+                break
+            if best_errors is None or errors @ errors < best_errors @ best_errors:
+                best, best_errors = x.copy(), errors.copy()
+            if code != STARTS or iterations >= settings.max_iterations or not settings.restarts:
+                break
+            generator = rng() if callable(rng) else rng
+            batch = lower + (upper - lower) * generator.random((RESTART_BATCH + 1, x.size))
+            x, starts = batch[0].copy(), batch[1:].copy()
+            restarts += 1
+        x, errors = best, best_errors
+    reached = code == REACHED
+    regularized = multipliers = None
+    if reached and settings.regularize and program.has_level(2):
+        multipliers = np.zeros(program.task_rows)
+        code = newton.regularize(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
+                                 settings.regularize_iterations, deadline_ns, multipliers, errors, stats)
+        regularized = _REGULARIZE_STATUS[int(code)]
+        evaluations += int(stats[1])
+    status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
+    return LocalResult(x, bool(reached), status, errors, int(iterations), int(evaluations), int(restarts),
+                       regularized, multipliers)
+
+
+_STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
+
+
+def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK) -> tuple[np.ndarray, np.ndarray]:
+    """Stacked residuals ``(m,)`` and Jacobians ``(m, n)`` of the blocks of ``level`` at ``x`` (``-1``: levels
+    1 and 2), in block order."""
+    program.refresh()
+    x = np.ascontiguousarray(x, dtype=float)
+    rows = int(program.prog[0][:, ROWS].sum())
+    r, J = np.empty(rows), np.empty((rows, x.size))
+    m = residuals_at(x, level, program.kin, program.prog, r, J)
+    return r[:m], J[:m]
+
+
+def task_errors(program: Program, x: np.ndarray) -> np.ndarray:
+    """``(blocks,)`` each task block's error ``‖r_b‖`` at ``x`` [m, or rad for orientations], in block order."""
+    program.refresh()
+    errors = np.empty(program.task_block_rows.size)
+    if errors.size:
+        task_errors_at(np.ascontiguousarray(x, dtype=float), program.kin, program.prog, errors)
+    return errors
+
+
+def reaching_is_optimal(program: Program, x: np.ndarray, multipliers: np.ndarray | None) -> bool:
+    """Whether ``x`` — on the task, regularizers minimized there — also minimizes the weighted sum locally
+    (every task block an exact penalty for the task's multipliers; see :func:`~framework.engine.newton.
+    exact_penalty`). ``True`` without multipliers (nothing was regularized)."""
+    if multipliers is None:
+        return True
+    lower, upper, box_wrap = search_box(program)
+    return bool(newton.exact_penalty(np.ascontiguousarray(x, dtype=float), lower, upper, box_wrap, program.prog,
+                                     np.ascontiguousarray(multipliers, dtype=float)))
+
+
+def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray,
+                      settings: LocalSettings = LocalSettings(), *, deadline: float | None = None
+                      ) -> tuple[np.ndarray, int]:
+    """The weighted sum of every task and regularizer term minimized from a point on the task, by active sets.
+
+    ``x0`` reaches the task with the regularizers minimized there and ``multipliers`` are the task's there. Each
+    round releases the task blocks that are no exact penalty for their multipliers (leaving them lowers the
+    sum: :func:`~framework.engine.newton.exact_penalty`) into the objective, and minimizes again on the blocks
+    still held (:func:`~framework.engine.newton.regularize` with those levels), until every held block is an
+    exact penalty. Blocks that pay for themselves stay exactly on their targets (no kink to smooth over).
+
+    Returns ``(x, evaluations)``.
+    """
+    program.refresh()
+    lower, upper, box_wrap = search_box(program)
+    bint = program.prog[0].copy()
+    bflt = program.prog[1]
+    x = np.array(x0, dtype=float)
+    lam = np.asarray(multipliers, dtype=float)
+    stats = np.zeros(3, dtype=np.int64)
+    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    evaluations = 0
+    for _ in range(int(np.sum(bint[:, LEVEL] == LEVEL_TASK))):
+        held = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
+        sizes = bint[held, ROWS]
+        norms = np.array([np.linalg.norm(part) for part in np.split(lam, np.cumsum(sizes)[:-1])]) if held.size \
+            else np.zeros(0)
+        slopes = np.where(bint[held, RHO] == HALFSIN, 0.5, 1.0)
+        release = held[norms >= bflt[held, WEIGHT] * bflt[held, SCALE] * slopes]
+        if release.size == 0:
+            break
+        bint[release, LEVEL] = LEVEL_REGULARIZER
+        prog = (bint, *program.prog[1:])
+        lam = np.zeros(int(bint[bint[:, LEVEL] == LEVEL_TASK, ROWS].sum()))
+        errors = np.zeros(int(np.sum(bint[:, LEVEL] == LEVEL_TASK)))
+        newton.regularize(x, lower, upper, box_wrap, program.kin, prog, settings.smoothing,
+                          settings.regularize_iterations, deadline_ns, lam, errors, stats)
+        evaluations += int(stats[1])
+    return x, evaluations
+
+
+def minimize_sum(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
+                 deadline: float | None = None) -> tuple[np.ndarray, str, int]:
+    """Damped Newton on the weighted sum of every task and regularizer term from any ``x0``, in the box (norms
+    smoothed at zero); see :func:`~framework.engine.newton.weighted_newton`. Returns ``(x, status, evaluations)``.
+    """
+    program.refresh()
+    lower, upper, box_wrap = search_box(program)
+    x = np.array(x0, dtype=float)
+    stats = np.zeros(3, dtype=np.int64)
+    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    code = newton.weighted_newton(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
+                                  settings.regularize_iterations, deadline_ns, stats)
+    return x, _REGULARIZE_STATUS[int(code)], int(stats[1])
+
+
+def objective_derivatives_at(program: Program, x: np.ndarray, level: int = -1, *, smoothing: float = 1e-10,
+                             curvature: bool = True) -> tuple[float, np.ndarray, np.ndarray]:
+    """Weighted value, gradient ``(n,)`` and Hessian ``(n, n)`` of the blocks of ``level`` at ``x`` (``-1``:
+    task and regularizers), as the Newton phases see them (the second-order kinematics with ``curvature``)."""
+    program.refresh()
+    x = np.ascontiguousarray(x, dtype=float)
+    return newton.derivatives_at(x, level, program.kin, program.prog, smoothing, curvature)

@@ -1,0 +1,450 @@
+"""Second-order phases of the local engine, compiled: regularizers minimized on the task, and weighted sums.
+
+:func:`regularize` — *priorities*: from a configuration that reaches the task (level 1), minimize the weighted
+regularizers (level 2, e.g. motion) without leaving it: Newton steps on the KKT system
+``[H Aᵀ; A 0] [dx; −λ] = [−∇G; −r]`` over the coordinates not held at a bound, with ``H`` the Hessian of the
+Lagrangian ``G − λᵀr`` (the regularizers' own curvature plus the task's second-order kinematics, see
+:func:`~framework.costs.blocks.block_curvature`), followed by Gauss-Newton steps back onto the task. A step is
+kept only if it lowers ``G`` on the task; otherwise the Hessian is damped (``H + μI``). Converges quadratically.
+
+:func:`weighted_newton` — the weighted sum ``Σ w ρ(r)`` of every term as it stands, for objectives where
+reaching the task costs more than it gains (the papers' weighted objectives with small task weights): damped
+Newton steps in the box with the same second-order kinematics.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..costs.blocks import LEVEL, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives
+from ..costs.kernels import level_value, linearize, task_errors, workspace
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
+from .clock import monotonic_ns
+from .linalg import cholesky_solve, least_norm_step, lu_solve
+from .reach import project
+
+#: Newton damping: start, floor, and where a phase gives up on further progress.
+MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
+#: Gauss-Newton steps back onto the task after a Newton step; halvings of a step before it is damped.
+RESTORE_STEPS, LINE_SEARCH = 4, 4
+
+CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
+
+
+@numba.njit(cache=True)
+def _rows_of(prog, level) -> int:
+    bint = prog[0]
+    rows = 0
+    for b in range(bint.shape[0]):
+        lv = bint[b, LEVEL]
+        if (level >= 0 and lv == level) or (level < 0 and lv != 0):
+            rows += bint[b, ROWS]
+    return rows
+
+
+@numba.njit(cache=True)
+def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu) -> float:
+    """Weighted value, gradient ``g (n,)`` and Hessian ``H (n, n)`` of the blocks of ``level`` (``< 0``: all
+    levels 1 and 2) from the residual rows in ``ws``; ``curvature`` adds their second-order kinematics.
+    ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block."""
+    bint, bflt, params = prog[0], prog[1], prog[2]
+    out, Jf, r, Jr = ws[0], ws[2], ws[3], ws[4]
+    n = g.shape[0]
+    g[:] = 0.0
+    H[:] = 0.0
+    row, value = 0, 0.0
+    for b in range(bint.shape[0]):
+        lv = bint[b, LEVEL]
+        if (level >= 0 and lv != level) or (level < 0 and lv == 0):
+            continue
+        rows, w = bint[b, ROWS], bflt[b, WEIGHT]
+        rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr)
+        s = 0.0
+        for a in range(rows):
+            s += r[row + a] * r[row + a]
+        value += w * _rho_from(bint[b, RHO], bflt[b, SCALE], s, r, row, rows)
+        for i in range(n):
+            acc = 0.0
+            for a in range(rows):
+                acc += Jr[row + a, i] * gr[a]
+            g[i] += w * acc
+        for a in range(rows):  # H += w Jᵀ Hr J
+            for c in range(rows):
+                h = w * Hr[a, c]
+                if h == 0.0:
+                    continue
+                for i in range(n):
+                    ja = Jr[row + a, i]
+                    if ja == 0.0:
+                        continue
+                    for j in range(n):
+                        H[i, j] += h * ja * Jr[row + c, j]
+        if curvature:
+            for a in range(rows):
+                mu[a] = w * gr[a]
+            block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, H)
+        row += rows
+    return value
+
+
+@numba.njit(cache=True)
+def _rho_from(rho, scale, s, r, row, rows) -> float:
+    if rho == 2:  # L1
+        t = 0.0
+        for a in range(rows):
+            t += abs(r[row + a])
+        return scale * t
+    if rho == 3:  # SQUARED
+        return scale * s
+    if rho == 1:  # HALFSIN
+        return scale * np.sin(0.5 * min(np.sqrt(s), np.pi))
+    return scale * np.sqrt(s)
+
+
+@numba.njit(cache=True)
+def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, steps, target) -> float:
+    """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target``; returns the final ``‖r‖``."""
+    n = x.shape[0]
+    e = 0.0
+    for i in range(m):
+        e += ws[3][i] * ws[3][i]
+    e = np.sqrt(e)
+    for _ in range(steps):
+        if e <= target:
+            break
+        if not least_norm_step(ws[4][:m], ws[3][:m], 1e-24, A, L, y, dx):
+            break
+        for i in range(n):
+            x[i] += dx[i]
+        project(x, lower, upper, box_wrap)
+        linearize(x, 1, kin, prog, ws, True, 1)
+        e_new = 0.0
+        for i in range(m):
+            e_new += ws[3][i] * ws[3][i]
+        e_new = np.sqrt(e_new)
+        if not e_new < e:
+            e = e_new
+            break
+        e = e_new
+    return e
+
+
+@numba.njit(cache=True)
+def _max_rows(prog) -> int:
+    bint = prog[0]
+    rows = 1
+    for b in range(bint.shape[0]):
+        rows = max(rows, bint[b, ROWS])
+    return rows
+
+
+@numba.njit(cache=True)
+def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
+               errors, stats) -> int:
+    """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
+
+    ``multipliers (m,)`` receives the task's Lagrange multipliers at the result (``∇G = Aᵀλ``), ``errors`` each
+    task block's error there, and ``stats`` ``int64 (3,)`` iterations, evaluations, accepted steps. Returns
+    ``CONVERGED``, ``STALLED`` (no step lowers ``G`` any more), ``DEADLINE``, ``ITERATIONS`` or
+    ``NOT_APPLICABLE`` (no regularizer, or no freedom left).
+    """
+    n = x.shape[0]
+    m, q = _rows_of(prog, 1), _rows_of(prog, 2)
+    stats[0], stats[1], stats[2] = 0, 0, 0
+    if q == 0 or m >= n:
+        return NOT_APPLICABLE
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
+    chain_ptr, chain_idx = prog[5], prog[6]
+    own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
+    big = _max_rows(prog)
+    own = (np.empty(q), np.zeros((q, n)), np.empty(q), np.zeros((q, n)), np.empty(n), np.empty((n, n)),
+           np.empty((m, m)), np.empty((m, m)), np.empty(max(m, n)), np.empty(n), np.zeros(m), np.zeros(m),
+           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + m, n + m)), np.empty((n + m, n + m + 1)),
+           np.empty(n + m), np.empty(n + m), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
+           np.empty(big), np.empty((n, n)))
+    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
+    cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
+    tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
+    g, H, Am, Lm, ym, dxm = borrow(own[4]), borrow(own[5]), borrow(own[6]), borrow(own[7]), borrow(own[8]), \
+        borrow(own[9])
+    lam, lam_neg, gl, fidx = borrow(own[10]), borrow(own[11]), borrow(own[12]), borrow(own[13])
+    K, M, rhs, sol, xt, dx = borrow(own[14]), borrow(own[15]), borrow(own[16]), borrow(own[17]), \
+        borrow(own[18]), borrow(own[19])
+    gr, Hr, mu_r, Hlb = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23])
+    linearize(x, 1, kin, prog, cur, True, 1)
+    linearize(x, 2, kin, prog, cur_r, True, 0)
+    evaluations = 1
+    feasible = 0.0
+    for i in range(m):
+        feasible += cur[3][i] * cur[3][i]
+    feasible = max(np.sqrt(feasible), 1e-13)
+    G = level_value(2, prog, cur_r[3], True)
+    objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
+    fresh = True  # g, H hold the derivatives at x
+    mu = MU_START
+    status, iterations, accepted = ITERATIONS, 0, 0
+    bint = prog[0]
+    while iterations < max_iterations:
+        if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
+            status = DEADLINE
+            break
+        iterations += 1
+        if not fresh:
+            objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+            fresh = True
+        for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
+            s = g[i]
+            for a in range(m):
+                s -= cur[4][a, i] * lam[a]
+            gl[i] = s
+        nf = 0
+        for i in range(n):
+            held = (x[i] <= lower[i] and gl[i] > 0.0) or (x[i] >= upper[i] and gl[i] < 0.0)
+            if box_wrap[i] or not held:
+                fidx[nf] = i
+                nf += 1
+        if nf <= m:
+            status = CONVERGED
+            break
+        row = 0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
+        k = nf + m
+        Kv, Mv, rv, sv = K[:k, :k], M[:k, : k + 1], rhs[:k], sol[:k]
+        Hlb[:, :] = H
+        for b in range(bint.shape[0]):
+            if bint[b, LEVEL] != 1:
+                continue
+            rows = bint[b, ROWS]
+            for a in range(rows):
+                lam_neg[row + a] = -lam[row + a]
+            block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], chain_ptr, chain_idx, cur[3], row, Hlb)
+            row += rows
+        A = cur[4]
+        for a in range(nf):
+            i = fidx[a]
+            for c in range(nf):
+                Kv[a, c] = Hlb[i, fidx[c]]
+            Kv[a, a] += mu
+            for c in range(m):
+                Kv[a, nf + c] = A[c, i]
+                Kv[nf + c, a] = A[c, i]
+            rv[a] = -g[i]
+        for a in range(m):
+            for c in range(m):
+                Kv[nf + a, nf + c] = 0.0
+            rv[nf + a] = -cur[3][a]
+        if not lu_solve(Kv, rv, Mv, sv):
+            mu *= 10.0
+            if mu > MU_MAX:
+                status = STALLED
+                break
+            continue
+        step = 0.0
+        for i in range(n):
+            dx[i] = 0.0
+        for a in range(nf):
+            dx[fidx[a]] = sv[a]
+            step = max(step, abs(sv[a]))
+        if step < 1e-12:
+            status = CONVERGED
+            break
+        alpha, accepted_step, Gt = 1.0, False, G
+        for _ in range(LINE_SEARCH):  # backtrack along the Newton direction before damping it
+            for i in range(n):
+                xt[i] = x[i] + alpha * dx[i]
+            project(xt, lower, upper, box_wrap)
+            linearize(xt, 1, kin, prog, tri, True, 1)
+            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am, Lm, ym, dxm, RESTORE_STEPS, feasible)
+            linearize(xt, 2, kin, prog, tri_r, True, 0)
+            evaluations += 1
+            Gt = level_value(2, prog, tri_r[3], True)
+            if e <= 10.0 * feasible and Gt < G:
+                accepted_step = True
+                break
+            alpha *= 0.5
+        if accepted_step:
+            gain = G - Gt
+            cur, tri = tri, cur
+            cur_r, tri_r = tri_r, cur_r
+            x[:] = xt
+            G = Gt
+            for a in range(m):
+                lam[a] = -sv[nf + a]
+            accepted += 1
+            fresh = False
+            if alpha == 1.0:
+                mu = max(mu * 0.1, MU_MIN)
+            if alpha * step < 1e-10 or gain <= 1e-16 * (1.0 + abs(G)):
+                status = CONVERGED
+                break
+        else:
+            mu *= 10.0
+            if mu > MU_MAX:
+                status = STALLED
+                break
+    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, RESTORE_STEPS, 0.0)  # to the last bit
+    linearize(x, 2, kin, prog, cur_r, True, 0)
+    objective_derivatives(2, prog, cur_r, smoothing, False, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    _multipliers(cur[4][:m], g, Am, Lm, ym, multipliers)
+    task_errors(prog, cur[3], errors)
+    stats[0], stats[1], stats[2] = iterations, evaluations, accepted
+    keep_alive(own_cur, own_tri, own)
+    return status
+
+
+@numba.njit(cache=True)
+def _multipliers(A, g, Am, Lm, y, lam):
+    """Least-squares multipliers ``λ = (A Aᵀ)⁻¹ A g`` of ``g ≈ Aᵀλ`` (zeros if ``A`` is rank deficient)."""
+    m, n = A.shape
+    for a in range(m):
+        s = 0.0
+        for i in range(n):
+            s += A[a, i] * g[i]
+        y[a] = s
+        for c in range(a + 1):
+            t = 0.0
+            for i in range(n):
+                t += A[a, i] * A[c, i]
+            Am[a, c] = t
+            Am[c, a] = t
+    rhs = y.copy()
+    if not cholesky_solve(Am, rhs, Lm, lam):
+        lam[:] = 0.0
+
+
+@numba.njit(cache=True)
+def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, stats) -> int:
+    """Minimize ``Σ w ρ(r)`` over every task and regularizer block from ``x`` (in place), within the box.
+
+    ``stats`` ``int64 (3,)``: iterations, evaluations, accepted steps. Returns ``CONVERGED``, ``STALLED``,
+    ``DEADLINE`` or ``ITERATIONS``.
+    """
+    n = x.shape[0]
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
+    chain_ptr, chain_idx = prog[5], prog[6]
+    own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
+    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
+    linearize(x, -1, kin, prog, cur, True, 1)
+    evaluations = 1
+    g, H = np.empty(n), np.empty((n, n))
+    big = _max_rows(prog)
+    gr, Hr, mu_r = np.empty(big), np.empty((big, big)), np.empty(big)
+    F = objective_derivatives(-1, prog, cur, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    Hf, Lf, gf, sf = np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n)
+    fidx = np.empty(n, dtype=np.int64)
+    xt = np.empty(n)
+    mu = MU_START
+    status, iterations, accepted = ITERATIONS, 0, 0
+    fresh = True
+    while iterations < max_iterations:
+        if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
+            status = DEADLINE
+            break
+        iterations += 1
+        if not fresh:
+            F = objective_derivatives(-1, prog, cur, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+            fresh = True
+        nf = 0
+        for i in range(n):
+            held = (x[i] <= lower[i] and g[i] > 0.0) or (x[i] >= upper[i] and g[i] < 0.0)
+            if box_wrap[i] or not held:
+                fidx[nf] = i
+                nf += 1
+        if nf == 0:
+            status = CONVERGED
+            break
+        Hv, Lv, gv, sv = Hf[:nf, :nf], Lf[:nf, :nf], gf[:nf], sf[:nf]
+        for a in range(nf):
+            for c in range(nf):
+                Hv[a, c] = H[fidx[a], fidx[c]]
+            Hv[a, a] += mu
+            gv[a] = -g[fidx[a]]
+        if not cholesky_solve(Hv, gv, Lv, sv):
+            mu = max(mu * 10.0, 1e-10)
+            if mu > MU_MAX:
+                status = STALLED
+                break
+            continue
+        step = 0.0
+        xt[:] = x
+        for a in range(nf):
+            xt[fidx[a]] += sv[a]
+            step = max(step, abs(sv[a]))
+        project(xt, lower, upper, box_wrap)
+        linearize(xt, -1, kin, prog, tri, True, 1)
+        evaluations += 1
+        Ft = level_value(-1, prog, tri[3], True)
+        if Ft < F:
+            gain = F - Ft
+            cur, tri = tri, cur
+            x[:] = xt
+            F = Ft
+            fresh = False
+            accepted += 1
+            mu = max(mu * 0.1, MU_MIN)
+            if step < 1e-10 or gain <= 1e-16 * (1.0 + abs(F)):
+                status = CONVERGED
+                break
+        else:
+            if step < 1e-12:
+                status = CONVERGED
+                break
+            mu *= 10.0
+            if mu > MU_MAX:
+                status = STALLED
+                break
+    stats[0], stats[1], stats[2] = iterations, evaluations, accepted
+    keep_alive(own_cur, own_tri)
+    return status
+
+
+@numba.njit(cache=True)
+def exact_penalty(x, lower, upper, box_wrap, prog, multipliers) -> bool:
+    """Whether the task's multipliers make every weighted task block an exact penalty at ``x``.
+
+    A block weighted ``w`` with ``ρ = s‖r‖`` is one when ``‖λ_b‖ < w s`` (``w s / 2`` for ``ρ = s sin(‖r‖/2)``):
+    then no move off the task lowers the weighted sum. ``False`` on the box boundary (bound multipliers are not
+    computed) and for other ρ.
+    """
+    for i in range(x.shape[0]):
+        if not box_wrap[i] and (x[i] <= lower[i] or x[i] >= upper[i]):
+            return False
+    bint, bflt = prog[0], prog[1]
+    row = 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != 1:
+            continue
+        rows, rho = bint[b, ROWS], bint[b, RHO]
+        if rho == 0:
+            slope = 1.0
+        elif rho == 1:
+            slope = 0.5
+        else:
+            return False
+        s = 0.0
+        for a in range(rows):
+            s += multipliers[row + a] * multipliers[row + a]
+        if not np.sqrt(s) < bflt[b, WEIGHT] * bflt[b, SCALE] * slope:
+            return False
+        row += rows
+    return True
+
+
+@numba.njit(cache=True)
+def derivatives_at(x, level, kin, prog, smoothing, curvature):
+    """``(value, gradient (n,), Hessian (n, n))`` of the weighted blocks of ``level`` at ``x`` (for callers
+    outside the loops: tests, reports)."""
+    n = x.shape[0]
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    own = workspace(kin, prog, n)
+    ws = borrow_ws(own)
+    linearize(borrow(x), level, kin, prog, ws, True, 1)
+    big = _max_rows(prog)
+    g, H = np.empty(n), np.empty((n, n))
+    value = objective_derivatives(level, prog, ws, smoothing, curvature, g, H, prog[5], prog[6], np.empty(big),
+                                  np.empty((big, big)), np.empty(big))
+    keep_alive(own)
+    return value, g, H

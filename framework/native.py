@@ -1,0 +1,54 @@
+"""Borrowed array views for compiled kernels: no reference counting in the hot loops.
+
+Numba counts references to every array it passes to a function (two atomic operations per array per call).
+With a dozen arrays per helper call that is ~70 ns — more than the arithmetic of a residual block. A kernel
+therefore *borrows* its arrays once at entry (:func:`borrow`: a view of the same memory without an owner) and
+passes the views down; the owning arrays stay referenced by the kernel's arguments, or by a local variable the
+kernel keeps alive to its end (:func:`keep_alive`), so the memory outlives every view.
+"""
+
+from __future__ import annotations
+
+import numba
+from numba.core import cgutils, types
+from numba.extending import intrinsic
+
+
+@intrinsic
+def _address_as_pointer(typingctx, address):
+    def codegen(context, builder, signature, args):
+        return builder.inttoptr(args[0], cgutils.voidptr_t)
+
+    return types.voidptr(address), codegen
+
+
+@numba.njit(cache=True, inline="always")
+def borrow(a):
+    """A view of the C-contiguous array ``a`` without an owner (valid while ``a`` is alive)."""
+    return numba.carray(_address_as_pointer(a.ctypes.data), a.shape, a.dtype)
+
+
+@numba.njit(cache=True, inline="always")
+def borrow_kin(kin):
+    """:func:`borrow` over the kinematic tables ``(jint, jgeo, fslot, fgeo)``."""
+    return borrow(kin[0]), borrow(kin[1]), borrow(kin[2]), borrow(kin[3])
+
+
+@numba.njit(cache=True, inline="always")
+def borrow_prog(prog):
+    """:func:`borrow` over a packed program ``(bint, bflt, params, idx, wrap, chain_ptr, chain_idx)``."""
+    return (borrow(prog[0]), borrow(prog[1]), borrow(prog[2]), borrow(prog[3]), borrow(prog[4]),
+            borrow(prog[5]), borrow(prog[6]))
+
+
+@numba.njit(cache=True, inline="always")
+def borrow_ws(ws):
+    """:func:`borrow` over a workspace ``(out, W, Jf, r, Jr, L3, E9)``."""
+    return (borrow(ws[0]), borrow(ws[1]), borrow(ws[2]), borrow(ws[3]), borrow(ws[4]), borrow(ws[5]),
+            borrow(ws[6]))
+
+
+@numba.njit(cache=True)
+def keep_alive(*owners) -> int:
+    """Reference ``owners`` here, so a kernel keeps them (and the views borrowed from them) alive to this point."""
+    return len(owners)

@@ -1,0 +1,155 @@
+"""``hybrid``: the local engine first, a metaheuristic's global phase when that is not enough — the default.
+
+1. The local engine (:func:`framework.engine.solve_local`) from the warm start — ``initial``, else the
+   configuration the regularizers measure from (motion's ``q_prev``), else the middle of the box:
+   Levenberg-Marquardt reaches the task, Newton steps minimize the regularizers on it. From a warm start the
+   engine first stays in its basin (no restart; along a path a restart would jump to another branch), then
+   restarts from random configurations if that basin misses; from the middle it restarts at once.
+2. If that misses the task, a short global phase of a metaheuristic (``cmaes_fast``, 30 generations) from a
+   uniform start picks another point for the engine (the better of the two is kept). An explicit
+   ``global_iterations`` runs the global phase first instead.
+3. For a weighted objective (``Problem.priorities`` false, the papers' sums), a point on the task is kept only
+   if it also minimizes the weighted sum: when the task's multipliers say that leaving the task lowers the sum
+   (weights too small for reaching to pay), the task terms that do not pay for themselves are released into
+   the objective (:func:`framework.engine.minimize_weighted`), damped Newton steps on the whole sum from the
+   start look into another basin, and the best point by the objective is returned.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from .base import minimize
+from .ik import IKSolver, Outcome, Request, positive_int
+from .metaheuristic import within
+from .multistart import DEFAULT_ITERATIONS, local_settings, start_configuration, stop_reason
+from .registry import register_ik
+
+#: Generations of the global phase when the engine misses the task from the warm start.
+GLOBAL_ITERATIONS = 30
+#: Iterations without progress before the engine gives up the warm start's basin (and restarts at random).
+WARM_STALL = 40
+
+
+@dataclass(frozen=True)
+class HybridOptions:
+    """Options of ``hybrid``.
+
+    Attributes:
+        global_solver: metaheuristic of the global phase.
+        global_iterations: its generations: ``None`` runs it only when the engine misses the task (30
+            generations from a uniform start); a number runs that many first, from the warm start.
+        global_options: options of the global solver.
+        warm_start: without ``initial``, start where the regularizers measure from (e.g. ``q_prev``).
+        restarts: random restarts of the engine within its budget.
+        stall: engine iterations without progress before a restart.
+        polish: Gauss-Newton steps after reaching the tolerance.
+    """
+
+    global_solver: str = "cmaes_fast"
+    global_iterations: int | None = None
+    global_options: Mapping[str, Any] | None = None
+    warm_start: bool = True
+    restarts: bool = True
+    stall: int = 6
+    polish: int = 3
+    regularize: bool = True
+
+    def __post_init__(self) -> None:
+        if self.global_iterations is not None:
+            positive_int(self.global_iterations, "hybrid option global_iterations", minimum=0)
+        positive_int(self.stall, "hybrid option stall")
+        positive_int(self.polish, "hybrid option polish", minimum=0)
+
+
+@register_ik("hybrid")
+class Hybrid(IKSolver):
+    """Compiled local engine from the warm start; a short metaheuristic phase when it misses (see module)."""
+
+    reference = "ours: Levenberg-Marquardt + task-constrained Newton, CMA-ES (Hansen, arXiv:1604.00772)"
+    Options = HybridOptions
+    uses_jacobians = True
+
+    def solve(self, problem, request: Request) -> Outcome:
+        o = self.options
+        x0, start = start_configuration(problem, request, o.warm_start)
+        budget = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
+        settings = local_settings(request, o, budget)
+        counter = _Counter(problem, request)
+        iterations = evaluations = restarts = 0
+        history: list[float] = []
+
+        def engine(x: np.ndarray, settings: LocalSettings = settings):
+            nonlocal iterations, evaluations, restarts
+            result = solve_local(problem.program, x, request.rng, settings, deadline=request.deadline)
+            iterations, evaluations = iterations + result.iterations, evaluations + result.evaluations
+            restarts += result.restarts
+            counter.report(result.x)
+            return result
+
+        def global_phase(initial: np.ndarray | None, generations: int) -> np.ndarray:
+            nonlocal iterations, evaluations
+            run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=o.global_solver,
+                           rng=request.rng(), max_iterations=generations, population=request.population,
+                           initial=initial, bounds=problem.repair_mode, options=o.global_options,
+                           callback=counter.global_callback)
+            iterations, evaluations = iterations + run.iterations, evaluations + run.evaluations
+            history.extend(run.history.tolist())
+            return run.x
+
+        escalated = False
+        if o.global_iterations:
+            x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
+        if start == "middle" or not o.restarts:
+            best = engine(x0)
+        else:  # a warm start's basin first (a slow descent near a singularity is not a reason to leave it) ...
+            best = engine(x0, replace(settings, restarts=False, stall=WARM_STALL))
+            if not best.reached and request.time_left() > 0:  # ... then random restarts
+                best = min((best, engine(x0)), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
+        if not best.reached and o.global_iterations is None and request.time_left() > 0:
+            escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
+            cold = engine(global_phase(None, GLOBAL_ITERATIONS))
+            best = min((best, cold), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
+        x, errors, weighted = best.x, best.task_errors, False
+        if not problem.priorities and best.reached and not reaching_is_optimal(problem.program, x, best.multipliers):
+            weighted = True  # reaching costs more than it gains under these weights: the sum as it stands
+            y, spent = minimize_weighted(problem.program, x, best.multipliers, settings, deadline=request.deadline)
+            z, _, more = minimize_sum(problem.program, x0, settings, deadline=request.deadline)  # another basin
+            evaluations += spent + more
+            points = [x, y, z]
+            x, errors = points[int(np.argmin(problem.cost(np.array(points))))], None
+            counter.report(x)
+        if errors is None:
+            stop = "tolerance" if within(problem, x, request) else "max_iterations"
+        else:
+            stop = stop_reason(best.reached, request)
+        if stop == "max_iterations" and request.deadline is not None and request.time_left() <= 0:
+            stop = "time_budget"
+        report = {"start": start, "max_iterations": budget, "escalated": escalated, "restart_count": restarts,
+                  "regularized": best.regularized, "weighted": weighted, "population": request.population,
+                  **{k: v for k, v in o.__dict__.items() if k != "global_options"}}
+        return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
+                       task_errors=errors)
+
+
+class _Counter:
+    """Numbers the iterations reported to ``solve``'s callback across the phases (engine results included)."""
+
+    def __init__(self, problem, request: Request):
+        self.problem, self.request, self.count = problem, request, 0
+
+    def report(self, x: np.ndarray) -> None:
+        self.count += 1
+        if self.request.callback is not None:
+            self.request.callback(self.count, float(self.problem.cost(x)[0]), x.copy())
+
+    def global_callback(self, iteration: int, best_f: float, best_x: np.ndarray) -> bool:
+        self.count += 1
+        stop = bool(self.request.callback(self.count, best_f, best_x)) if self.request.callback else False
+        return stop or (self.request.deadline is not None and time.monotonic() >= self.request.deadline)

@@ -1,0 +1,134 @@
+"""The interface every IK solver implements: ``solver.solve(problem, request) -> Outcome``.
+
+:func:`framework.solve` builds a :class:`Request` from its arguments, looks the solver up by name
+(:func:`~framework.solvers.registry.ik_solver`) and turns the :class:`Outcome` into an
+:class:`~framework.solve.IKResult`. A solver declares what it can take as class attributes (a warm start, a
+search distribution carried along a path, Jacobians), so callers never branch on solver names. Options are a
+frozen dataclass per solver (:attr:`IKSolver.Options`): typed, documented, with defaults; unknown names are
+an error.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+
+from ..errors import SolverError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..problem import Problem
+
+Callback = Callable[[int, float, np.ndarray], "bool | None"]
+
+
+@dataclass(frozen=True)
+class Request:
+    """What one solve asks for (built by :func:`framework.solve`).
+
+    Attributes:
+        rng: the generator (created on first use, so solves that need no randomness do not pay for it).
+        tolerance: every position-like task term within this [m]; angle_tolerance: orientations [rad].
+        max_iterations: the solver's iteration budget (``None``: its own default).
+        population: candidates per iteration (metaheuristics; the hybrid's global phase).
+        initial: ``(k, n)`` warm starts, or ``None``.
+        deadline: ``time.monotonic()`` at which to stop, or ``None``.
+        stop_at_tolerance: stop as soon as the task is within tolerance (metaheuristics run their budget).
+        callback: ``callback(iteration, best_f, best_x)`` after each iteration; True stops.
+        progress: print progress lines.
+    """
+
+    rng: Callable[[], np.random.Generator]
+    tolerance: float
+    angle_tolerance: float
+    max_iterations: int | None = None
+    population: int = 30
+    initial: np.ndarray | None = None
+    deadline: float | None = None
+    stop_at_tolerance: bool = False
+    callback: Callback | None = None
+    progress: bool = False
+
+    def time_left(self) -> float:
+        return np.inf if self.deadline is None else self.deadline - time.monotonic()
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a solver found: the configuration ``x`` ``(n,)`` and how it got there (``history``: the best cost
+    after each iteration; ``None``: just the final cost)."""
+
+    x: np.ndarray
+    stop_reason: str
+    iterations: int
+    evaluations: int
+    history: np.ndarray | None = None
+    settings: dict[str, Any] = field(default_factory=dict)
+    state: dict[str, Any] = field(default_factory=dict)
+    task_errors: np.ndarray | None = None  # each task block's error at x, if the solver computed them
+
+
+@dataclass(frozen=True)
+class NoOptions:
+    """A solver without options."""
+
+
+class IKSolver(ABC):
+    """One IK method behind one interface.
+
+    Class attributes (capabilities, read by tracking and the CLI instead of solver names):
+        name: registry name; reference: where the method comes from.
+        Options: its options dataclass.
+        uses_jacobians: a local method (tracking gives it a Jacobian predictor by default).
+        carries_distribution: takes its previous solve's :attr:`Outcome.state` (a search distribution) along a
+            path (CMA-ES).
+        step_option: name of the option setting its initial search spread around a warm start (``"sigma0"``),
+            or ``None``.
+    """
+
+    name: ClassVar[str] = ""
+    reference: ClassVar[str] = ""
+    Options: ClassVar[type] = NoOptions
+    uses_jacobians: ClassVar[bool] = False
+    carries_distribution: ClassVar[bool] = False
+    step_option: ClassVar[str | None] = None
+
+    def __init__(self, options: Mapping[str, Any] | None = None):
+        self.options = parse_options(self.Options, options, self.name)
+
+    @abstractmethod
+    def solve(self, problem: Problem, request: Request) -> Outcome:
+        """Solve ``problem`` as ``request`` asks."""
+
+    @classmethod
+    def defaults(cls) -> dict[str, Any]:
+        """Option name -> default value."""
+        return {f.name: f.default for f in dataclasses.fields(cls.Options)}
+
+
+def parse_options(options_type: type, options: Mapping[str, Any] | None, solver: str):
+    """An ``options_type`` instance from a mapping; unknown names raise :class:`SolverError` listing the known."""
+    if options is None:
+        return options_type()
+    if isinstance(options, options_type):
+        return options
+    if not isinstance(options, Mapping):
+        raise SolverError(f"options of solver {solver!r} must be a table of names and values; got {options!r}")
+    known = {f.name for f in dataclasses.fields(options_type)}
+    unknown = sorted(set(options) - known)
+    if unknown:
+        raise SolverError(f"unknown option(s) {unknown} for solver {solver!r}; its options are {sorted(known)}")
+    return options_type(**options)
+
+
+def positive_int(value: Any, what: str, *, minimum: int = 1) -> int:
+    """``value`` as an int ``>= minimum``; raises :class:`SolverError` naming ``what``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) or value != int(value) \
+            or not np.isfinite(value) or int(value) < minimum:
+        raise SolverError(f"{what} must be an integer >= {minimum}; got {value!r}")
+    return int(value)

@@ -1,0 +1,98 @@
+"""``multistart_lm``: the local engine with random restarts, TRAC-IK's strategy, nothing else.
+
+From the warm start (``initial``, else the configuration the regularizers measure from, else the middle of the
+box), Levenberg-Marquardt drives every task term within tolerance, restarting from uniform random
+configurations when a descent stalls, until the tolerance, the iteration budget or the time budget; then the
+regularizers (motion) are minimized on the task (:func:`framework.engine.solve_local`). Task terms always come
+first, whatever the weights.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..engine import LocalSettings, solve_local
+from .ik import IKSolver, Outcome, Request, positive_int
+from .registry import register_ik
+
+#: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is not given a budget.
+DEFAULT_ITERATIONS = 2000
+
+
+@dataclass(frozen=True)
+class MultistartOptions:
+    """Options of ``multistart_lm``.
+
+    Attributes:
+        stall: iterations without 10 % progress of ``‖r‖²`` before a restart.
+        restarts: restart from random configurations (``False``: one descent from the start).
+        polish: Gauss-Newton steps after reaching the tolerance (to machine precision).
+        regularize: minimize the regularizers on the task afterwards.
+        warm_start: without ``initial``, start where the regularizers measure from (e.g. ``q_prev``).
+    """
+
+    stall: int = 6
+    restarts: bool = True
+    polish: int = 3
+    regularize: bool = True
+    warm_start: bool = True
+
+    def __post_init__(self) -> None:
+        positive_int(self.stall, "multistart_lm option stall")
+        positive_int(self.polish, "multistart_lm option polish", minimum=0)
+
+
+def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
+    """The first start and where it came from: ``initial``, the regularizers' reference, or the box middle."""
+    if request.initial is not None:
+        return request.initial[0].copy(), "initial"
+    x = problem.robot.middle.copy()
+    if warm_start and problem.program.reference(x):
+        return np.clip(x, problem.robot.lower, problem.robot.upper), "previous"
+    return x, "middle"
+
+
+def local_settings(request: Request, options, max_iterations: int) -> LocalSettings:
+    """The engine settings of a request (memoized: a solve should not pay for building them)."""
+    key = (request.tolerance, request.angle_tolerance, max_iterations, options)
+    cached = _SETTINGS.get(key)
+    if cached is None:
+        if len(_SETTINGS) > 256:
+            _SETTINGS.clear()
+        cached = _SETTINGS[key] = LocalSettings(
+            tolerance=request.tolerance, angle_tolerance=request.angle_tolerance, max_iterations=max_iterations,
+            stall=options.stall, restarts=options.restarts, polish=options.polish, regularize=options.regularize)
+    return cached
+
+
+_SETTINGS: dict[tuple, LocalSettings] = {}
+
+
+def stop_reason(reached: bool, request: Request) -> str:
+    """``tolerance`` when reached, else ``time_budget`` or ``max_iterations``."""
+    if reached:
+        return "tolerance"
+    return "time_budget" if request.deadline is not None and request.time_left() <= 0 else "max_iterations"
+
+
+@register_ik("multistart_lm")
+class MultistartLM(IKSolver):
+    """Levenberg-Marquardt from the warm start with random restarts (compiled), then regularizers on the task."""
+
+    reference = "Beeson & Ames, TRAC-IK, Humanoids 2015 (restarts); Marquardt, SIAM J. Appl. Math. 11 (1963)"
+    Options = MultistartOptions
+    uses_jacobians = True
+
+    def solve(self, problem, request: Request) -> Outcome:
+        x0, start = start_configuration(problem, request, self.options.warm_start)
+        iterations = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
+        result = solve_local(problem.program, x0, request.rng, local_settings(request, self.options, iterations),
+                             deadline=request.deadline)
+        if request.callback is not None:
+            request.callback(1, float(problem.cost(result.x)[0]), result.x.copy())
+        settings = {"start": start, "max_iterations": iterations, "restart_count": result.restarts,
+                    "regularized": result.regularized, **self.options.__dict__}
+        return Outcome(result.x, stop_reason(result.reached, request), result.iterations, result.evaluations,
+                       None, settings, task_errors=result.task_errors)
