@@ -123,6 +123,7 @@ def run_one(path: str, solver: str, cache: Path) -> str:
         iterations_per_point=ITERATIONS,
         population=POPULATION,
         initial=Q_PREV,
+        priorities=False,  # the paper's weighted sum
         progress=False,
     )
     np.savez(

@@ -76,6 +76,7 @@ def run(system: str, method: str) -> tuple[str, str, dict]:
             initial=case.initial,
             tolerance=s["tolerance"],
             bounds=s["bounds"],
+            priorities=task.priorities,
             progress=False,
         )
         wall = result.wall_time

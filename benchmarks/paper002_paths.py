@@ -89,6 +89,7 @@ def run_one(robot: str, path: str, solver: str, cache: Path) -> str:
         population=POPULATION,
         initial=case.initial,
         options=OPTIONS.get(solver),
+        priorities=task.priorities,
         progress=False,
     )
     np.savez(

@@ -6,7 +6,7 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition, Term
+from .costs import JointLimitPenalty, Motion, Objective, Orientation, Pose, Position, RelativePosition, Term
 from .errors import (
     ConfigurationError,
     LimitsError,
@@ -25,7 +25,7 @@ from .loading import load_robot, robot_from_urdf, robot_index
 from .problem import Evaluation, Problem
 from .robot import Joint, JointKind, Robot
 from .solve import IKResult, solve
-from .solvers import available_solvers
+from .solvers import solver_names
 
 __version__ = "0.1.0"
 
@@ -37,11 +37,12 @@ __all__ = [
     "Motion",
     "Objective",
     "Orientation",
+    "Pose",
     "Position",
     "Problem",
     "RelativePosition",
     "Term",
-    "available_solvers",
+    "solver_names",
     "solve",
     "FramePoses",
     "Joint",

@@ -283,6 +283,7 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
             tolerance=tolerance,
             stop_at_tolerance=settings.get("stop_at_tolerance", False),
             bounds=settings.get("bounds", "resample"),
+            priorities=task.priorities,
             options=settings.get("options"),
             progress=False if args.no_progress else None,
         )

@@ -217,6 +217,14 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[9 + r] = w[3 * r] * g[9] + w[3 * r + 1] * g[10] + w[3 * r + 2] * g[11] + w[9 + r]
 
 
+@numba.njit(cache=True, inline="always")
+def _finite(x) -> bool:
+    for i in range(x.shape[0]):
+        if not np.isfinite(x[i]):
+            return False
+    return True
+
+
 @numba.njit(cache=True)
 def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
     """FK of every row of ``X``; returns the first row holding NaN/inf, or -1."""
@@ -225,7 +233,7 @@ def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
     jint, jgeo, fslot, fgeo = borrow(jint), borrow(jgeo), borrow(fslot), borrow(fgeo)
     bad = -1
     for b in range(X.shape[0]):
-        if not np.all(np.isfinite(X[b])):
+        if not _finite(X[b]):
             bad = b
             break
         _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
@@ -241,7 +249,7 @@ def _jac_serial(X, jint, jgeo, fslot, fgeo, out, J):
     jint, jgeo, fslot, fgeo = borrow(jint), borrow(jgeo), borrow(fslot), borrow(fgeo)
     bad = -1
     for b in range(X.shape[0]):
-        if not np.all(np.isfinite(X[b])):
+        if not _finite(X[b]):
             bad = b
             break
         fk_jacobian_one(X[b], jint, jgeo, fslot, fgeo, out[b], W, J[b])

@@ -57,9 +57,10 @@ class Problem:
         bounds: out-of-box candidates are ``"resample"``-d uniformly (paper 000 eq. 12), ``"clip"``-ped, or
             left to a ``"penalty"`` (a :class:`~framework.costs.JointLimitPenalty` is appended if the objective
             has none); the local engine always keeps its steps in the box.
-        priorities: ``True``: the task terms come first, whatever the weights (the regularizers are minimized
-            without leaving the task). ``False`` (the papers' weighted sums): the weighted sum is what counts,
-            so with small task weights the optimum may stop short of a reachable target.
+        priorities: ``True`` (default): the task terms come first, whatever the weights — the local solvers reach
+            the task and minimize the regularizers without leaving it. ``False`` (the papers' weighted sums):
+            the weighted sum is what counts, so with small task weights the optimum may stop short of a
+            reachable target. Metaheuristics minimize the weighted sum either way.
 
     Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
     """
@@ -67,7 +68,7 @@ class Problem:
     robot: Robot
     objective: Objective
     bounds: str = "resample"
-    priorities: bool = False
+    priorities: bool = True
 
     def __post_init__(self) -> None:
         objective = self.objective
@@ -77,6 +78,8 @@ class Problem:
             raise TaskError("a problem needs an objective of at least one cost term")
         if self.bounds not in BOUNDS:
             raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")
+        if not isinstance(self.priorities, bool):
+            raise TaskError(f"priorities must be true or false; got {self.priorities!r}")
         if self.bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in objective):
             from .costs import JointLimitPenalty
 
@@ -96,17 +99,23 @@ class Problem:
         return self.robot.n
 
     @property
-    def names(self) -> tuple[str, ...]:
-        return self.objective.names
-
-    @property
     def weights(self) -> np.ndarray:
         return self._weights.copy()
 
     @cached_property
     def task_mask(self) -> np.ndarray:
         """``(k,)`` True for task terms."""
-        return np.array([t.is_task for _, t in self.objective], dtype=bool)
+        return np.array(self.task_list, dtype=bool)
+
+    @cached_property
+    def task_list(self) -> tuple[bool, ...]:
+        """Whether each term is a task term (a tuple, for per-solve bookkeeping without numpy calls)."""
+        return tuple(t.is_task for _, t in self.objective)
+
+    @cached_property
+    def names(self) -> tuple[str, ...]:
+        """Unique labels of the terms, in objective order."""
+        return self.objective.names
 
     @property
     def repair_mode(self) -> str:
@@ -130,7 +139,7 @@ class Problem:
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` objective values: the population cost solvers minimize."""
-        return self.values(X) @ self._weights
+        return self.program.cost(self.robot.check_population(X, finite=False))
 
     def evaluate(self, X: np.ndarray) -> Evaluation:
         """Every term of every member, the cost and the task error."""

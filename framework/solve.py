@@ -158,28 +158,30 @@ def _lazy_generator(seed: int | np.random.Generator) -> Callable[[], np.random.G
 
 
 def _result(problem: Problem, outcome, solver: str, request: Request, start: float) -> IKResult:
-    x = np.asarray(outcome.x, dtype=float)
-    values = problem.values(x)[0]
-    cost = float(values @ problem._weights)
+    x = np.array(outcome.x, dtype=float)
     program = problem.program
+    values = program.values(x[None])[0] if outcome.values is None else outcome.values
+    cost = float(values @ problem._weights)
     errors = outcome.task_errors
     if errors is None:
         errors = task_errors(program, x)
-    success = bool(np.all(errors <= np.where(program.task_angular, request.angle_tolerance, request.tolerance)))
-    history = np.array([cost]) if outcome.history is None else np.asarray(outcome.history, dtype=float)
+    linear, angular = request.tolerance, request.angle_tolerance
+    error_list = errors.tolist()
+    success = all(e <= (angular if a else linear) for e, a in zip(error_list, program.task_angular_list))
+    value_list = values.tolist()
     return IKResult(
-        configuration=x.copy(),
+        configuration=x,
         cost=cost,
-        terms=dict(zip(problem.names, values.tolist())),
-        task_error=float(values[problem.task_mask].sum()),
+        terms=dict(zip(problem.names, value_list)),
+        task_error=sum(v for v, task in zip(value_list, problem.task_list) if task),
         success=success,
         stop_reason=outcome.stop_reason,
         iterations=int(outcome.iterations),
         evaluations=int(outcome.evaluations),
         wall_time=time.perf_counter() - start,
-        history=history,
+        history=np.array([cost]) if outcome.history is None else np.asarray(outcome.history, dtype=float),
         solver=solver,
         settings=outcome.settings,
         state=outcome.state,
-        errors=dict(zip(program.task_blocks, errors.tolist())),
+        errors=dict(zip(program.task_blocks, error_list)),
     )

@@ -5,6 +5,7 @@ A task file reads top to bottom like the experiment it describes::
     [task]
     name = "youbot_dual_coordinated_ik"
     robot = "youbot_dual_mobile"          # index name, or a path relative to the task file
+    priorities = false                    # the paper's weighted sum decides (default true: the task terms first)
 
     [solver]
     name = "cmaes"                        # any registered solver, or "hybrid"
@@ -196,6 +197,7 @@ class TaskFile:
     solver: dict[str, Any]
     cases: tuple[Case, ...]
     raw: dict[str, Any] = field(repr=False, default_factory=dict)
+    priorities: bool = True
 
     @property
     def is_tracking(self) -> bool:
@@ -263,6 +265,9 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
     cases_raw = raw.get("cases") or [{"name": task.get("name", path.stem)}]
     cases = []
     bounds = solver.get("bounds", "resample")
+    priorities = task.get("priorities", True)
+    if not isinstance(priorities, bool):
+        raise TaskError(f"[task] priorities must be true or false; got {priorities!r}")
     for i, case in enumerate(cases_raw):
         variables = {k: v for k, v in case.items() if k not in ("name", "trajectory")}
         name = str(case.get("name", f"case {i + 1}"))
@@ -270,7 +275,7 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
         spec = case.get("trajectory", raw.get("trajectory"))
         if spec is None:
             objective = _objective(robot, terms, variables, previous)
-            cases.append(Case(name, Problem(robot, objective, bounds=bounds), variables))
+            cases.append(Case(name, Problem(robot, objective, bounds=bounds, priorities=priorities), variables))
             continue
         reserved = sorted(set(variables) & set(WAYPOINT_VARIABLES))
         if reserved:
@@ -279,8 +284,10 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
         _check_uses_waypoint(terms)
         builder = _TermsAtWaypoint(robot, terms, variables)
         first = builder(0, trajectory.positions[0], trajectory.rotation(0), previous)
-        cases.append(Case(name, Problem(robot, first, bounds=bounds), variables, trajectory, builder, previous))
-    return TaskFile(path, task.get("name", path.stem), task.get("description", ""), robot, solver, tuple(cases), raw)
+        cases.append(Case(name, Problem(robot, first, bounds=bounds, priorities=priorities), variables, trajectory,
+                          builder, previous))
+    return TaskFile(path, task.get("name", path.stem), task.get("description", ""), robot, solver, tuple(cases), raw,
+                    priorities)
 
 
 def _table(raw: Mapping, key: str, path: Path) -> dict:

@@ -311,6 +311,7 @@ def track(
     tolerance: float = 1e-4,
     stop_at_tolerance: bool = False,
     bounds: str = "resample",
+    priorities: bool = True,
     options: Mapping[str, Any] | None = None,
     progress: bool | None = None,
     callback: TrackingCallback | None = None,
@@ -343,6 +344,8 @@ def track(
         tolerance: a waypoint succeeds if every task term is within this [m, or rad for orientations].
         stop_at_tolerance: stop each solve as soon as the task error is within ``tolerance``.
         bounds: ``"resample"``, ``"clip"`` or ``"penalty"`` (see :class:`~framework.problem.Problem`).
+        priorities: task terms first (default) or the weighted sum as it stands (the papers), see
+            :class:`~framework.problem.Problem`.
         options: solver options (a solver with a global phase, the hybrid, runs :data:`FIRST_GLOBAL_ITERATIONS`
             generations of it at the first waypoint unless ``options`` set them).
         progress: show a progress bar (``None``: only on a terminal).
@@ -389,7 +392,8 @@ def track(
                 moved = problem is not None and spec is not None and spec.update(
                     problem.objective, position, rotation, previous)
                 if not moved:
-                    problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds)
+                    problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
+                                      priorities=priorities)
                 seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start, warm_spread,
                                                     predict and warm_start, population, rng, carry, state)
                 result = solve(problem, solver, seed=rng, max_iterations=iterations_per_point,
@@ -416,6 +420,7 @@ def track(
         "tolerance": tolerance,
         "stop_at_tolerance": stop_at_tolerance,
         "bounds": bounds,
+        "priorities": priorities,
         "options": options,
         "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task)),
     }

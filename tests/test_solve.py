@@ -65,7 +65,7 @@ def test_result_reports_every_term(problem):
 
 
 def test_cmaes_reaches_the_target_and_the_hybrid_matches_it_with_fewer_evaluations(problem):
-    cma = solve(problem, "cmaes_fast", seed=1, max_iterations=600)
+    cma = solve(problem, "cmaes_fast", seed=1, max_iterations=1000)  # the paper's budget: 1e-15 to 1e-14 m
     hybrid = solve(problem, "hybrid", seed=1)
     assert cma.task_error < 1e-9
     assert hybrid.success and hybrid.task_error < 1e-12
@@ -115,15 +115,21 @@ def test_bounds_modes(problem):
 
 
 def test_hybrid_minimizes_the_objective_when_reaching_is_not_worth_it():
-    """Position weighted 0.01, motion 1: the optimum stays at q_prev, short of the target."""
+    """Position weighted 0.01, motion 1: as a weighted sum (the papers) the optimum stays at q_prev, short of the
+    target; with priorities (the default) the task comes first and the motion is minimized on it."""
     robot = fw.load_robot("youbot_arm")
     prev = robot.middle
     target = robot.frame_placement(prev, "ee").translation + [0.0, 0.0, 0.1]
-    problem = Problem(robot, 0.01 * Position("ee", target) + 1.0 * Motion("arm", prev))
-    result = solve(problem, "hybrid", seed=0)
-    assert not result.success
+    objective = 0.01 * Position("ee", target) + 1.0 * Motion("arm", prev)
+    result = solve(Problem(robot, objective, priorities=False), "hybrid", seed=0)
+    assert not result.success and result.settings["weighted"]
     assert result.cost <= 0.01 * 0.1 + 1e-6  # no worse than not moving at all
     assert result.terms["motion[arm]"] < 1e-3
+    first = solve(Problem(robot, objective), "hybrid", seed=0)
+    assert first.success and first.errors["position[ee]"] < 1e-12 and first.terms["motion[arm]"] > 0.05
+    # ... with the least motion on the task: a reaching configuration from another start moves more
+    other = solve(Problem(robot, Position("ee", target)), "hybrid", seed=0)
+    assert first.terms["motion[arm]"] <= Problem(robot, objective).values(other.configuration)[0, 1] + 1e-12
 
 
 def test_multistart_lm_solves_full_poses_and_is_deterministic(rng):

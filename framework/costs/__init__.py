@@ -4,6 +4,7 @@ from .base import LEVELS, Objective, Term, check_weight
 from .limits import JointLimitPenalty
 from .motion import Motion
 from .orientation import Orientation, rotation_from
+from .pose import Pose, pose_from
 from .position import Position
 from .program import Block, Program
 from .relative import RelativePosition
@@ -15,10 +16,12 @@ __all__ = [
     "Motion",
     "Objective",
     "Orientation",
+    "Pose",
     "Position",
     "Program",
     "RelativePosition",
     "Term",
     "check_weight",
+    "pose_from",
     "rotation_from",
 ]

@@ -18,7 +18,8 @@ cannot.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+import math
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -62,6 +63,16 @@ class Term:
     def blocks(self, robot: Robot) -> tuple[Block, ...] | None:
         """The term's residual blocks for ``robot`` (``None``: no compiled form, :meth:`value` is used)."""
         return None
+
+    def packed(self, robot: Robot) -> tuple[tuple[Block, ...] | None, tuple | None]:
+        """``(blocks, signature)`` for ``robot``, remembered until a target changes (packing reads it)."""
+        cache = self.__dict__.get("_packed")
+        if cache is not None and cache[0] is robot and cache[1] == self.version:
+            return cache[2], cache[3]
+        blocks = self.blocks(robot)
+        signature = None if blocks is None else tuple(b.signature() for b in blocks)
+        self._packed = (robot, self.version, blocks, signature)
+        return blocks, signature
 
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses | None = None) -> np.ndarray:
         """Unweighted value of each member of ``X`` ``(pop, n)``: shape ``(pop,)``.
@@ -153,14 +164,19 @@ class Objective:
         return tuple(dict.fromkeys(f for _, t in self.terms for f in t.frames))
 
 
-def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str) -> np.ndarray:
-    """A finite float vector of length ``size``; raises :class:`TaskError` naming ``what``."""
+def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str | Callable[[], str]) -> np.ndarray:
+    """A finite float vector of length ``size`` (a new array); raises :class:`TaskError` naming ``what`` (a
+    string, or a callable making it only when there is an error)."""
     try:
-        v = np.asarray(value, dtype=float)
+        v = np.array(value, dtype=float)
     except (TypeError, ValueError):
-        raise TaskError(f"{what} must be {size} numbers; got {value!r}") from None
+        raise TaskError(f"{_name(what)} must be {size} numbers; got {value!r}") from None
     if v.shape != (size,):
-        raise TaskError(f"{what} must have shape ({size},); got {v.shape}")
-    if not np.all(np.isfinite(v)):
-        raise TaskError(f"{what} holds NaN or inf: {v.tolist()}")
+        raise TaskError(f"{_name(what)} must have shape ({size},); got {v.shape}")
+    if not all(map(math.isfinite, v.tolist())):
+        raise TaskError(f"{_name(what)} holds NaN or inf: {v.tolist()}")
     return v
+
+
+def _name(what: str | Callable[[], str]) -> str:
+    return what() if callable(what) else what

@@ -29,16 +29,35 @@ from .blocks import (
 
 @numba.njit(cache=True)
 def workspace(kin, prog, n):
-    """Scratch arrays for one configuration: poses, joint placements, frame Jacobians, residual rows."""
+    """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
+    ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, two small matrices — as views of
+    one allocation."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
     for b in range(bint.shape[0]):
         rows += bint[b, ROWS]
     rows = max(rows, 1)
-    k = fslot.shape[0]
-    return (np.empty((k, 12)), np.empty((jint.shape[0], 12)), np.zeros((k, 6, n)), np.empty(rows),
-            np.zeros((rows, n)), np.empty((3, 3)), np.empty(9))
+    k, J = fslot.shape[0], jint.shape[0]
+    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, 9)
+    total = 0
+    for size in sizes:
+        total += size
+    buffer = np.empty(total)
+    a = 0
+    out = buffer[a : a + sizes[0]].reshape((k, 12))
+    a += sizes[0]
+    W = buffer[a : a + sizes[1]].reshape((J, 12))
+    a += sizes[1]
+    Jf = buffer[a : a + sizes[2]].reshape((k, 6, n))
+    a += sizes[2]
+    r = buffer[a : a + sizes[3]]
+    a += sizes[3]
+    Jr = buffer[a : a + sizes[4]].reshape((rows, n))
+    a += sizes[4]
+    L3 = buffer[a : a + 9].reshape((3, 3))
+    E9 = buffer[a + 9 : a + 18]
+    return out, W, Jf, r, Jr, L3, E9
 
 
 @numba.njit(cache=True, inline="always")
@@ -80,6 +99,18 @@ def level_value(level, prog, r, weighted) -> float:
         total += bflt[b, WEIGHT] * v if weighted else v
         row += rows
     return total
+
+
+@numba.njit(cache=True)
+def term_values(x, prog, ws, values):
+    """Each term's value into ``values (terms,)`` from the poses in ``ws`` (computed at ``x``); overwrites the
+    residual rows of ``ws``."""
+    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
+    out, W, Jf, r, Jr, L3, E9 = ws
+    values[:] = 0.0
+    for b in range(bint.shape[0]):
+        rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
+        values[bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
 
 
 @numba.njit(cache=True)
@@ -172,3 +203,34 @@ def task_errors_at(x, kin, prog, errors):
     linearize(borrow(x), 1, kin, prog, ws, False, 1)
     task_errors(prog, ws[3], errors)
     keep_alive(own)
+
+
+@numba.njit(cache=True)
+def population_cost(X, kin, prog, F) -> int:
+    """The weighted sum of every compiled block's value for each row of ``X`` into ``F (pop,)``.
+
+    Returns the first row of ``X`` holding NaN or inf (left unevaluated), or -1.
+    """
+    kin, prog = borrow_kin(kin), borrow_prog(prog)
+    X, F = borrow(X), borrow(F)
+    jint, jgeo, fslot, fgeo = kin
+    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
+    n = X.shape[1]
+    own = workspace(kin, prog, n)
+    out, W, Jf, r, Jr, L3, E9 = borrow_ws(own)
+    bad = -1
+    for m in range(X.shape[0]):
+        x = X[m]
+        for i in range(n):
+            if not np.isfinite(x[i]):
+                bad = m
+        if bad >= 0:
+            break
+        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+        f = 0.0
+        for b in range(bint.shape[0]):
+            rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
+            f += bflt[b, WEIGHT] * rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+        F[m] = f
+    keep_alive(own)
+    return bad

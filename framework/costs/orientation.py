@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numba
 import numpy as np
 
 from ..errors import TaskError
@@ -20,14 +21,14 @@ from .program import Block
 
 
 def rotation_from(target: Sequence[float] | np.ndarray, what: str) -> np.ndarray:
-    """A rotation matrix from a ``(3, 3)`` matrix or an ``(x, y, z, w)`` quaternion; validated."""
+    """A rotation matrix ``(3, 3)`` from a ``(3, 3)`` matrix or an ``(x, y, z, w)`` quaternion; validated."""
     try:
-        t = np.asarray(target, dtype=float)
+        t = np.array(target, dtype=float)
     except (TypeError, ValueError):
         raise TaskError(f"{what} must be a (3, 3) rotation matrix or an (x, y, z, w) quaternion") from None
-    if not np.all(np.isfinite(t)):
-        raise TaskError(f"{what} holds NaN or inf")
     if t.shape == (4,):
+        if not np.all(np.isfinite(t)):
+            raise TaskError(f"{what} holds NaN or inf")
         norm = np.linalg.norm(t)
         if norm < 1e-9:
             raise TaskError(f"{what}: a zero quaternion is not a rotation")
@@ -40,10 +41,30 @@ def rotation_from(target: Sequence[float] | np.ndarray, what: str) -> np.ndarray
             ]
         )
     if t.shape == (3, 3):
-        if not np.allclose(t.T @ t, np.eye(3), atol=1e-6) or np.linalg.det(t) < 0:
+        problem = _rotation_defect(t)
+        if problem == 1:
+            raise TaskError(f"{what} holds NaN or inf")
+        if problem == 2:
             raise TaskError(f"{what} is not a rotation matrix (RᵀR ≠ I or det < 0)")
         return t
     raise TaskError(f"{what} must be a (3, 3) rotation matrix or an (x, y, z, w) quaternion; got shape {t.shape}")
+
+
+@numba.njit(cache=True)
+def _rotation_defect(R) -> int:
+    """0 for a rotation matrix (``|RᵀR − I| <= 1e-6``, ``det R > 0``), 1 for NaN/inf, 2 otherwise."""
+    for a in range(3):
+        for b in range(3):
+            if not np.isfinite(R[a, b]):
+                return 1
+    for a in range(3):
+        for b in range(3):
+            s = R[0, a] * R[0, b] + R[1, a] * R[1, b] + R[2, a] * R[2, b]
+            if abs(s - (1.0 if a == b else 0.0)) > 1e-6:
+                return 2
+    det = (R[0, 0] * (R[1, 1] * R[2, 2] - R[1, 2] * R[2, 1]) - R[0, 1] * (R[1, 0] * R[2, 2] - R[1, 2] * R[2, 0])
+           + R[0, 2] * (R[1, 0] * R[2, 1] - R[1, 1] * R[2, 0]))
+    return 0 if det > 0 else 2
 
 
 class Orientation(Term):

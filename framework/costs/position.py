@@ -28,7 +28,7 @@ class Position(Term):
 
     def set_target(self, target: Sequence[float]) -> None:
         """Move the target point ``(3,)`` [m, world] (a problem holding the term re-reads it)."""
-        self.target = as_vector(target, 3, f"position target of {self.frame!r}")
+        self.target = as_vector(target, 3, lambda: f"position target of {self.frame!r}")
         self._touch()
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:

@@ -17,7 +17,7 @@ import numpy as np
 from ..errors import TaskError
 from ..robot import JointKind, Robot
 from . import blocks as B
-from .kernels import population_values
+from .kernels import population_cost, population_values
 
 if TYPE_CHECKING:  # pragma: no cover
     from .base import Objective, Term
@@ -51,8 +51,7 @@ class Block(NamedTuple):
     def signature(self) -> tuple:
         """Everything but the parameters' values: blocks of equal signatures pack into the same layout."""
         indices = None if self.indices is None else self.indices.tobytes()
-        return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, np.size(self.params),
-                indices)
+        return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, len(self.params), indices)
 
 
 def _kind(level: int, blocks: tuple[Block, ...] | None) -> str:
@@ -85,7 +84,8 @@ class _Layout:
     Shared by every problem with the same terms (kinds, frames, coordinates) on the same robot.
     """
 
-    def __init__(self, robot: Robot, levels: list[int], packed: list[tuple[Block, ...] | None]):
+    def __init__(self, robot: Robot, terms: tuple[Term, ...], packed: list[tuple[Block, ...] | None]):
+        levels = [_LEVELS[t.level] for t in terms]
         frames = list(dict.fromkeys(f for p in packed if p for block in p for f in block.frames))
         self.frames = tuple(frames)
         kinematics = robot._kinematics(self.frames)
@@ -122,9 +122,32 @@ class _Layout:
         self.task_block_rows = self.bint[task, B.ROWS]
         self.levels_present = frozenset(self.bint[:, B.LEVEL].tolist())
         self.term_kinds = tuple(_kind(level, blocks) for level, blocks in zip(levels, packed))
+        self.compiled = np.array([p is not None for p in packed])
+        self.generic = [k for k, p in enumerate(packed) if p is None]
+        names = []
+        for term, level, blocks in zip(terms, levels, packed):
+            for block in (blocks or ()) if level == B.LEVEL_TASK else ():
+                suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
+                names.append(term.name + (suffix if len(blocks) > 1 else ""))
+        self.task_blocks = tuple(names)
+        self._bflt: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = self.task_tolerances == B.TOL_ANGULAR
+        self.task_angular_list = tuple(self.task_angular.tolist())
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
+        self.no_starts = np.zeros((0, robot.n))
+
+    def bflt(self, weights: tuple[float, ...]) -> np.ndarray:
+        """The ``(blocks, 2)`` table of weights and scales for the terms' ``weights`` (built once per weights)."""
+        table = self._bflt.get(weights)
+        if table is None:
+            if len(self._bflt) > 64:
+                self._bflt.clear()
+            table = np.empty((self.scales.size, 2))
+            table[:, 0] = np.asarray(weights)[self.block_term] if self.scales.size else 0.0
+            table[:, 1] = self.scales
+            self._bflt[weights] = table
+        return table
 
 
 class Program:
@@ -140,28 +163,24 @@ class Program:
     def __init__(self, robot: Robot, objective: Objective):
         self.robot = robot
         self.terms: tuple[Term, ...] = tuple(t for _, t in objective)
-        self.weights = np.array([w for w, _ in objective], dtype=float)
-        packed = [t.blocks(robot) for t in self.terms]
-        key = ("layout", tuple((t.level, None if p is None else tuple(b.signature() for b in p))
-                               for t, p in zip(self.terms, packed)))
+        weights = tuple(float(w) for w, _ in objective)
+        self.weights = np.array(weights)
+        packed = [t.packed(robot) for t in self.terms]
+        key = ("layout", tuple((t.level, t.name, signature) for t, (_, signature) in zip(self.terms, packed)))
         layout = robot._cache.get(key)
         if layout is None:
-            layout = robot._cache[key] = _Layout(robot, [_LEVELS[t.level] for t in self.terms], packed)
+            layout = robot._cache[key] = _Layout(robot, self.terms, [blocks for blocks, _ in packed])
         self.layout = layout
         self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
-        flat = [b.params for p in packed if p for b in p]
+        flat = [b.params for blocks, _ in packed if blocks for b in blocks]
         params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
-        bflt = np.empty((layout.scales.size, 2))
-        bflt[:, 0] = self.weights[layout.block_term]
-        bflt[:, 1] = layout.scales
-        self.prog = (layout.bint, bflt, params, layout.idx, layout.wrap, *layout.chains)
+        self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
-        self.task_angular = layout.task_angular
-        self.task_rows = layout.task_rows
-        self.term_kinds = layout.term_kinds
-        self.compiled = np.array([p is not None for p in packed])
+        self.task_angular, self.task_angular_list = layout.task_angular, layout.task_angular_list
+        self.task_rows, self.task_blocks = layout.task_rows, layout.task_blocks
+        self.term_kinds, self.compiled = layout.term_kinds, layout.compiled
+        self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
         self._versions = [t.version for t in self.terms]
-        self._generic = [k for k, p in enumerate(packed) if p is None]
 
     def reference(self, x: np.ndarray) -> bool:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they
@@ -171,18 +190,6 @@ class Program:
             x[idx[i]] = params[p]
         return bool(self.layout.references)
 
-    @cached_property
-    def task_blocks(self) -> tuple[str, ...]:
-        """A name for each task block's error, in block order (``name.distance`` / ``name.angle`` for terms of
-        several blocks)."""
-        names = []
-        for term in self.terms:
-            blocks = term.blocks(self.robot) if term.level == "task" else None
-            for block in blocks or ():
-                suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
-                names.append(term.name + (suffix if len(blocks) > 1 else ""))
-        return tuple(names)
-
     @property
     def levels(self) -> np.ndarray:
         """``(terms,)`` level of each term (0 value only, 1 task, 2 regularizer)."""
@@ -191,6 +198,9 @@ class Program:
     def has_level(self, level: int) -> bool:
         """Whether any compiled block is at ``level``."""
         return level in self.layout.levels_present
+
+    def _versions_changed(self) -> bool:
+        return any(t.version != v for t, v in zip(self.terms, self._versions))
 
     def refresh(self) -> None:
         """Re-pack the parameters of terms whose targets changed since the last call (a few µs)."""
@@ -204,19 +214,35 @@ class Program:
                     value = np.ravel(block.params)
                     params[start : start + value.size] = value
 
+    def cost(self, X: np.ndarray) -> np.ndarray:
+        """``(pop,)`` weighted sums of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
+        if self.layout.generic:
+            return self.values(X) @ self.weights
+        if self._versions_changed():
+            self.refresh()
+        F = np.empty(X.shape[0])
+        bad = population_cost(X, self.kin, self.prog, F)
+        if bad >= 0:
+            from ..errors import ConfigurationError
+
+            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        return F
+
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, terms)`` unweighted values of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
-        self.refresh()
+        if self._versions_changed():
+            self.refresh()
         V = np.zeros((X.shape[0], len(self.terms)))
         bad = population_values(X, self.kin, self.prog, V)
         if bad >= 0:
             from ..errors import ConfigurationError
 
             raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
-        if self._generic:
-            frames = tuple(dict.fromkeys(f for k in self._generic for f in self.terms[k].frames))
+        generic = self.layout.generic
+        if generic:
+            frames = tuple(dict.fromkeys(f for k in generic for f in self.terms[k].frames))
             poses = self.robot.frame_poses(X, frames) if frames else None
-            for k in self._generic:
+            for k in generic:
                 V[:, k] = self.terms[k].value(self.robot, X, poses)
         return V
 

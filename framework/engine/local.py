@@ -90,6 +90,7 @@ class LocalResult(NamedTuple):
             restarts from random configurations.
         regularized: status of the regularizer phase (``"converged"``, ``"stalled"``, ...; ``None`` if not run).
         multipliers: ``(rows,)`` the task's Lagrange multipliers after that phase (``None`` if not run).
+        values: ``(terms,)`` each term's value at ``x`` (``None`` when the problem has terms without blocks).
     """
 
     x: np.ndarray
@@ -101,6 +102,7 @@ class LocalResult(NamedTuple):
     restarts: int
     regularized: str | None = None
     multipliers: np.ndarray | None = None
+    values: np.ndarray | None = None
 
 
 def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -127,46 +129,49 @@ def solve_local(
         deadline: ``time.monotonic()`` at which to stop (overrides ``settings.time_budget``).
     """
     program.refresh()
-    lower, upper, box_wrap = search_box(program)
+    lower, upper, box_wrap = program.robot.lower, program.robot.upper, program.layout.box_wrap
     x = np.array(x0, dtype=float)
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
     deadline_ns = 0 if deadline is None else int(deadline * 1e9)
-    stats = np.zeros(3, dtype=np.int64)
-    errors = np.zeros(program.task_block_rows.size)
+    stats = np.empty(3, dtype=np.int64)
+    errors = np.empty(program.task_block_rows.size)
+    values = np.zeros(len(program.terms))
     iterations = evaluations = restarts = 0
     code = REACHED
     if program.task_rows:
         best, best_errors = x, None
-        starts = np.zeros((0, x.size))  # the first descent needs no random numbers: draw them when it stalls
+        starts = program.layout.no_starts  # the first descent needs no random numbers: drawn when it stalls
         while True:
             code = reach(x, starts, lower, upper, box_wrap, program.kin, program.prog, settings.tolerance,
                          settings.angular, settings.max_iterations - iterations, settings.stall, deadline_ns,
-                         settings.polish, errors, stats)
+                         settings.polish, errors, values, stats)
             iterations, evaluations, restarts = iterations + stats[0], evaluations + stats[1], restarts + stats[2]
             if code == REACHED:
-                best, best_errors = x, errors
+                best, best_errors, best_values = x, errors, values
                 break
             if best_errors is None or errors @ errors < best_errors @ best_errors:
-                best, best_errors = x.copy(), errors.copy()
+                best, best_errors, best_values = x.copy(), errors.copy(), values.copy()
             if code != STARTS or iterations >= settings.max_iterations or not settings.restarts:
                 break
             generator = rng() if callable(rng) else rng
             batch = lower + (upper - lower) * generator.random((RESTART_BATCH + 1, x.size))
             x, starts = batch[0].copy(), batch[1:].copy()
             restarts += 1
-        x, errors = best, best_errors
+        x, errors, values = best, best_errors, best_values
     reached = code == REACHED
     regularized = multipliers = None
-    if reached and settings.regularize and program.has_level(2):
+    if reached and settings.regularize and program.has_regularizers:
         multipliers = np.zeros(program.task_rows)
         code = newton.regularize(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
-                                 settings.regularize_iterations, deadline_ns, multipliers, errors, stats)
+                                 settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
         regularized = _REGULARIZE_STATUS[int(code)]
         evaluations += int(stats[1])
     status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
+    if not program.task_rows and not regularized:  # nothing ran: the values at the start
+        values = program.values(x[None])[0]
     return LocalResult(x, bool(reached), status, errors, int(iterations), int(evaluations), int(restarts),
-                       regularized, multipliers)
+                       regularized, multipliers, values if not program.layout.generic else None)
 
 
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
@@ -239,7 +244,8 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray,
         lam = np.zeros(int(bint[bint[:, LEVEL] == LEVEL_TASK, ROWS].sum()))
         errors = np.zeros(int(np.sum(bint[:, LEVEL] == LEVEL_TASK)))
         newton.regularize(x, lower, upper, box_wrap, program.kin, prog, settings.smoothing,
-                          settings.regularize_iterations, deadline_ns, lam, errors, stats)
+                          settings.regularize_iterations, deadline_ns, lam, errors, np.zeros(len(program.terms)),
+                          stats)
         evaluations += int(stats[1])
     return x, evaluations
 

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from ..costs.blocks import LEVEL, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives
-from ..costs.kernels import level_value, linearize, task_errors, workspace
+from ..costs.kernels import level_value, linearize, task_errors, term_values, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, least_norm_step, lu_solve
@@ -26,6 +26,8 @@ from .reach import project
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
 MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
+#: Largest coordinate change of a first Newton step on the task [rad or m], and of any step.
+TRUST_START, TRUST_MAX = 0.1, 1.0
 #: Gauss-Newton steps back onto the task after a Newton step; halvings of a step before it is damped.
 RESTORE_STEPS, LINE_SEARCH = 4, 4
 
@@ -141,11 +143,11 @@ def _max_rows(prog) -> int:
 
 @numba.njit(cache=True)
 def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
-               errors, stats) -> int:
+               errors, values, stats) -> int:
     """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
 
     ``multipliers (m,)`` receives the task's Lagrange multipliers at the result (``∇G = Aᵀλ``), ``errors`` each
-    task block's error there, and ``stats`` ``int64 (3,)`` iterations, evaluations, accepted steps. Returns
+    task block's error there, ``values`` each term's value, and ``stats`` ``int64 (3,)`` iterations, evaluations, accepted steps. Returns
     ``CONVERGED``, ``STALLED`` (no step lowers ``G`` any more), ``DEADLINE``, ``ITERATIONS`` or
     ``NOT_APPLICABLE`` (no regularizer, or no freedom left).
     """
@@ -184,7 +186,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
     _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
-    mu = MU_START
+    mu, trust = MU_START, TRUST_START
     status, iterations, accepted = ITERATIONS, 0, 0
     bint = prog[0]
     while iterations < max_iterations:
@@ -250,6 +252,10 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         if step < 1e-12:
             status = CONVERGED
             break
+        if step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
+            for i in range(n):
+                dx[i] *= trust / step
+            step = trust
         alpha, accepted_step, Gt = 1.0, False, G
         for _ in range(LINE_SEARCH):  # backtrack along the Newton direction before damping it
             for i in range(n):
@@ -276,12 +282,16 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             fresh = False
             if alpha == 1.0:
                 mu = max(mu * 0.1, MU_MIN)
+                trust = min(2.0 * trust, TRUST_MAX)
+            else:
+                trust = max(alpha * step, 1e-12)
             if alpha * step < 1e-10 or gain <= 1e-16 * (1.0 + abs(G)):
                 status = CONVERGED
                 break
         else:
+            trust *= 0.1
             mu *= 10.0
-            if mu > MU_MAX:
+            if mu > MU_MAX or trust < 1e-12:
                 status = STALLED
                 break
     _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, RESTORE_STEPS, 0.0)  # to the last bit
@@ -289,6 +299,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     objective_derivatives(2, prog, cur_r, smoothing, False, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
     _multipliers(cur[4][:m], g, Am, Lm, ym, multipliers)
     task_errors(prog, cur[3], errors)
+    term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
     keep_alive(own_cur, own_tri, own)
     return status

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.kernels import linearize, task_errors, within_tolerance, workspace
+from ..costs.kernels import linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import least_norm_step, levenberg_marquardt_step
@@ -80,7 +80,7 @@ def squared_norm(r, m) -> float:
 
 @numba.njit(cache=True)
 def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations, stall,
-          deadline_ns, polish, errors, stats) -> int:
+          deadline_ns, polish, errors, values, stats) -> int:
     """Drive every task block within tolerance from ``x (n,)``, then from ``starts[0]``, ``starts[1]``, ...
 
     Args:
@@ -91,6 +91,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
             a restart; ``deadline_ns``: ``monotonic_ns()`` at which to stop (0: none).
         polish: extra Gauss-Newton steps after success, kept while they lower ``‖r‖`` (to machine precision).
         errors: out: each task block's error at the returned ``x`` [m or rad].
+        values: out: each term's value at the returned ``x``.
         stats: ``int64 (3,)`` out: iterations, residual evaluations, restarts.
 
     Returns:
@@ -104,10 +105,16 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
     project(x, lower, upper, box_wrap)
     m = linearize(x, 1, kin, prog, ws, True, 1)
     k = min(m, n)
-    own = (np.empty((k, k)), np.empty((k, k)), np.empty(max(k, n)), np.empty(n), np.empty(n), np.empty((m, n)),
-           x.copy())
-    A, L, y, dx, xt, Jc, best = (borrow(own[0]), borrow(own[1]), borrow(own[2]), borrow(own[3]), borrow(own[4]),
-                                 borrow(own[5]), borrow(own[6]))
+    own = np.empty(2 * k * k + max(k, n) + 3 * n + m * n)  # one allocation, carved into the scratch arrays
+    scratch = borrow(own)
+    A = scratch[: k * k].reshape((k, k))
+    L = scratch[k * k : 2 * k * k].reshape((k, k))
+    a = 2 * k * k
+    y = scratch[a : a + max(k, n)]
+    a += max(k, n)
+    dx, xt, best = scratch[a : a + n], scratch[a + n : a + 2 * n], scratch[a + 2 * n : a + 3 * n]
+    Jc = scratch[a + 3 * n : a + 3 * n + m * n].reshape((m, n))
+    best[:] = x
     e = squared_norm(ws[3], m)
     best_e = e
     damping, checkpoint, since = DAMPING_START, e, 0
@@ -182,6 +189,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
         x[:] = best
         linearize(x, 1, kin, prog, ws, False, 1)
         task_errors(prog, ws[3], errors)
+    term_values(x, prog, ws, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, restarts
     keep_alive(own_ws, own_trial, own)
     return status

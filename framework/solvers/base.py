@@ -17,6 +17,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 
 from framework.errors import LimitsError, SolverError
@@ -106,8 +107,10 @@ def repair(X: np.ndarray, box: Box, rng: np.random.Generator, mode: str) -> np.n
     if mode == "none":
         return X
     if mode == "resample":
+        bad = _outside(X, box.lower, box.upper)
+        if not bad.any():
+            return X.copy()
         out = X.copy()
-        bad = ~box.contains(X)
     elif mode == "clip":
         out = np.clip(X, box.lower, box.upper)
         bad = ~np.all(np.isfinite(X), axis=1)
@@ -291,7 +294,21 @@ def _evaluate(cost: PopulationCost, X: np.ndarray) -> np.ndarray:
         raise SolverError(
             f"The cost must return shape ({X.shape[0]},) for X of shape {X.shape}, got {F.shape}."
         )
-    return np.where(np.isnan(F), np.inf, F)
+    nan = np.isnan(F)
+    return np.where(nan, np.inf, F) if nan.any() else F
+
+
+@numba.njit(cache=True)
+def _outside(X, lower, upper):
+    """``(pop,)`` True for rows of ``X`` with a coordinate outside ``[lower, upper]`` or not finite."""
+    bad = np.zeros(X.shape[0], dtype=np.bool_)
+    for k in range(X.shape[0]):
+        for i in range(X.shape[1]):
+            v = X[k, i]
+            if not (lower[i] <= v <= upper[i]):
+                bad[k] = True
+                break
+    return bad
 
 
 def _improved(previous_f: float, f: float) -> bool:

@@ -19,9 +19,9 @@ Evaluations: ``population`` per generation.
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar
 
+import numba
 import numpy as np
 
 from framework.errors import SolverError
@@ -91,45 +91,24 @@ class CMAESFast(Algorithm):
     def ask(self) -> np.ndarray:
         """``lambda`` samples ``m + sigma B D z``, shape ``(lambda, n)``."""
         z = self.rng.standard_normal((self.population, self.n))
-        X = self.mean + self.sigma * (z * self.D) @ self.B.T
+        X = _sample(self.mean, self.sigma, self.B, self.D, z)
         if self.generation == 0 and self.initial is not None:
             k = min(self.population - 1, self.initial.shape[0])
             X[:k] = self.initial[:k]
         self._asked = X
         return X.copy()
 
-    def _inv_sqrt_C(self, y: np.ndarray) -> np.ndarray:
-        """``C^{-1/2} y`` for rows of ``y``."""
-        return (y @ self.B / self.D) @ self.B.T
-
     def _tell(self, X: np.ndarray, F: np.ndarray) -> None:
-        # Scalars as Python floats and in-place updates: at lambda = 30 in 13-D, numpy call overhead is the cost.
-        n, w = self.n, self.weights
-        cs, cc, c1, cmu, mueff = self.cs, self.cc, self.c1, self.cmu, self.mueff
-        y = (X - self.mean) * (1.0 / self.sigma)
-        foreign = (X != self._asked).any(axis=1) if self._asked.shape == X.shape else np.ones(len(X), bool)
-        if foreign.any():  # repaired or injected points: clip the Mahalanobis length like pycma
-            length = np.sqrt(np.square(self._inv_sqrt_C(y[foreign])).sum(axis=1))
-            y[foreign] *= np.minimum(1.0, self.max_step / np.maximum(length, 1e-300))[:, None]
-        y_sel = y[np.argsort(F, kind="stable")[: w.size]]
-        y_w = w @ y_sel
-        self.mean = self.mean + self.sigma * y_w
-
-        self.ps *= 1 - cs
-        self.ps += math.sqrt(cs * (2 - cs) * mueff) * self._inv_sqrt_C(y_w)
+        # One compiled update (Hansen's tutorial, eq. 37-48): at lambda = 30 in 13-D, numpy call overhead would
+        # be the cost.
+        order = np.argsort(F, kind="stable")[: self.weights.size]
+        asked = self._asked if self._asked.shape == X.shape else np.full_like(X, np.nan)
         g = self.generation + 1
-        ps_norm = math.sqrt(float(self.ps @ self.ps))
-        hsig = ps_norm / math.sqrt(1 - (1 - cs) ** (2 * g)) / self.chi_n < 1.4 + 2 / (n + 1)
-        self.pc *= 1 - cc
-        if hsig:
-            self.pc += math.sqrt(cc * (2 - cc) * mueff) * y_w
-        self.C *= 1 - c1 - cmu + (0.0 if hsig else c1 * cc * (2 - cc))
-        self.C += c1 * (self.pc[:, None] * self.pc)
-        self.C += cmu * ((y_sel.T * w) @ y_sel)
-        sigma = self.sigma * math.exp((cs / self.damps) * (ps_norm / self.chi_n - 1))
-        self.sigma = min(max(sigma, 1e-300), self._max_sigma)
+        self.sigma, hsig = _update(X, asked, order, self.mean, self.sigma, self.ps, self.pc, self.C, self.B, self.D,
+                                   self.weights, self.cs, self.cc, self.c1, self.cmu, self.mueff, self.damps,
+                                   self.chi_n, self.max_step, float(g), self._max_sigma)
         self.generation = g
-        if g - self._eigen_generation > self.population / (c1 + cmu) / n / 10:
+        if g - self._eigen_generation > self.population / (self.c1 + self.cmu) / self.n / 10:
             self._update_eigensystem()
 
     def _update_eigensystem(self) -> None:
@@ -154,3 +133,82 @@ def _check_covariance(C: Any, n: int) -> np.ndarray:
     if np.linalg.eigvalsh(C)[0] <= 0:
         raise SolverError("cmaes_fast: covariance must be positive definite.")
     return 0.5 * (C + C.T)
+
+
+@numba.njit(cache=True)
+def _sample(mean, sigma, B, D, z):
+    """``m + sigma B D z`` for each row ``z`` of ``z (lambda, n)``."""
+    lam, n = z.shape
+    X = np.empty((lam, n))
+    for k in range(lam):
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                s += B[i, j] * D[j] * z[k, j]
+            X[k, i] = mean[i] + sigma * s
+    return X
+
+
+@numba.njit(cache=True)
+def _inv_sqrt(B, D, y, out):
+    """``out = C^{-1/2} y = B D⁻¹ Bᵀ y``."""
+    n = y.shape[0]
+    t = np.empty(n)
+    for j in range(n):
+        s = 0.0
+        for i in range(n):
+            s += B[i, j] * y[i]
+        t[j] = s / D[j]
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += B[i, j] * t[j]
+        out[i] = s
+
+
+@numba.njit(cache=True)
+def _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, mueff, damps, chi_n, max_step, g,
+            max_sigma):
+    """The CMA-ES update from told candidates ``X`` (in place on ``mean, ps, pc, C``); returns the new sigma
+    and h_sigma. Candidates that differ from the ``asked`` ones (repaired, injected) have their step
+    ``y = (x − m)/σ`` shortened to Mahalanobis length ``max_step``, as pycma does."""
+    mu, n = order.shape[0], X.shape[1]
+    y_sel = np.empty((mu, n))
+    tmp = np.empty(n)
+    for a in range(mu):
+        k = order[a]
+        foreign = False
+        for i in range(n):
+            y_sel[a, i] = (X[k, i] - mean[i]) / sigma
+            if X[k, i] != asked[k, i]:
+                foreign = True
+        if foreign:
+            _inv_sqrt(B, D, y_sel[a], tmp)
+            length = np.sqrt(np.sum(tmp * tmp))
+            if length > max_step:
+                for i in range(n):
+                    y_sel[a, i] *= max_step / length
+    y_w = np.zeros(n)
+    for a in range(mu):
+        for i in range(n):
+            y_w[i] += w[a] * y_sel[a, i]
+    for i in range(n):
+        mean[i] += sigma * y_w[i]
+    _inv_sqrt(B, D, y_w, tmp)
+    kps = np.sqrt(cs * (2 - cs) * mueff)
+    for i in range(n):
+        ps[i] = (1 - cs) * ps[i] + kps * tmp[i]
+    ps_norm = np.sqrt(np.sum(ps * ps))
+    hsig = ps_norm / np.sqrt(1 - (1 - cs) ** (2 * g)) / chi_n < 1.4 + 2 / (n + 1)
+    kpc = np.sqrt(cc * (2 - cc) * mueff)
+    for i in range(n):
+        pc[i] = (1 - cc) * pc[i] + (kpc * y_w[i] if hsig else 0.0)
+    decay = 1 - c1 - cmu + (0.0 if hsig else c1 * cc * (2 - cc))
+    for i in range(n):
+        for j in range(n):
+            s = 0.0
+            for a in range(mu):
+                s += w[a] * y_sel[a, i] * y_sel[a, j]
+            C[i, j] = decay * C[i, j] + c1 * pc[i] * pc[j] + cmu * s
+    new = sigma * np.exp((cs / damps) * (ps_norm / chi_n - 1))
+    return min(max(new, 1e-300), max_sigma), hsig

@@ -28,7 +28,7 @@ from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is
 from .base import minimize
 from .ik import IKSolver, Outcome, Request, positive_int
 from .metaheuristic import within
-from .multistart import DEFAULT_ITERATIONS, local_settings, start_configuration, stop_reason
+from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
 
 #: Generations of the global phase when the engine misses the task from the warm start.
@@ -76,10 +76,14 @@ class Hybrid(IKSolver):
     Options = HybridOptions
     uses_jacobians = True
 
+    def __init__(self, options=None):
+        super().__init__(options)
+        self.static_settings = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
+
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options
         x0, start = start_configuration(problem, request, o.warm_start)
-        budget = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
+        budget = default_iterations(request)
         settings = local_settings(request, o, budget)
         counter = _Counter(problem, request)
         iterations = evaluations = restarts = 0
@@ -116,14 +120,14 @@ class Hybrid(IKSolver):
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = engine(global_phase(None, GLOBAL_ITERATIONS))
             best = min((best, cold), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
-        x, errors, weighted = best.x, best.task_errors, False
+        x, errors, values, weighted = best.x, best.task_errors, best.values, False
         if not problem.priorities and best.reached and not reaching_is_optimal(problem.program, x, best.multipliers):
             weighted = True  # reaching costs more than it gains under these weights: the sum as it stands
             y, spent = minimize_weighted(problem.program, x, best.multipliers, settings, deadline=request.deadline)
             z, _, more = minimize_sum(problem.program, x0, settings, deadline=request.deadline)  # another basin
             evaluations += spent + more
             points = [x, y, z]
-            x, errors = points[int(np.argmin(problem.cost(np.array(points))))], None
+            x, errors, values = points[int(np.argmin(problem.cost(np.array(points))))], None, None
             counter.report(x)
         if errors is None:
             stop = "tolerance" if within(problem, x, request) else "max_iterations"
@@ -131,11 +135,11 @@ class Hybrid(IKSolver):
             stop = stop_reason(best.reached, request)
         if stop == "max_iterations" and request.deadline is not None and request.time_left() <= 0:
             stop = "time_budget"
-        report = {"start": start, "max_iterations": budget, "escalated": escalated, "restart_count": restarts,
-                  "regularized": best.regularized, "weighted": weighted, "population": request.population,
-                  **{k: v for k, v in o.__dict__.items() if k != "global_options"}}
+        report = {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
+                  "restart_count": restarts, "regularized": best.regularized, "weighted": weighted,
+                  "population": request.population}
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
-                       task_errors=errors)
+                       task_errors=errors, values=values)
 
 
 class _Counter:

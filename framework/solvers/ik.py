@@ -14,8 +14,8 @@ import dataclasses
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -27,9 +27,8 @@ if TYPE_CHECKING:  # pragma: no cover
 Callback = Callable[[int, float, np.ndarray], "bool | None"]
 
 
-@dataclass(frozen=True)
-class Request:
-    """What one solve asks for (built by :func:`framework.solve`).
+class Request(NamedTuple):
+    """What one solve asks for (built by :func:`framework.solve`; a named tuple: it is built once per solve).
 
     Attributes:
         rng: the generator (created on first use, so solves that need no randomness do not pay for it).
@@ -58,19 +57,20 @@ class Request:
         return np.inf if self.deadline is None else self.deadline - time.monotonic()
 
 
-@dataclass(frozen=True)
-class Outcome:
+class Outcome(NamedTuple):
     """What a solver found: the configuration ``x`` ``(n,)`` and how it got there (``history``: the best cost
-    after each iteration; ``None``: just the final cost)."""
+    after each iteration, ``None`` for just the final cost; ``task_errors`` and ``values``: each task block's
+    error and each term's value at ``x``, when the solver computed them on the way)."""
 
     x: np.ndarray
     stop_reason: str
     iterations: int
     evaluations: int
     history: np.ndarray | None = None
-    settings: dict[str, Any] = field(default_factory=dict)
-    state: dict[str, Any] = field(default_factory=dict)
-    task_errors: np.ndarray | None = None  # each task block's error at x, if the solver computed them
+    settings: dict[str, Any] = {}
+    state: dict[str, Any] = {}
+    task_errors: np.ndarray | None = None
+    values: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

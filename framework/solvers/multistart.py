@@ -17,7 +17,7 @@ from ..engine import LocalSettings, solve_local
 from .ik import IKSolver, Outcome, Request, positive_int
 from .registry import register_ik
 
-#: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is not given a budget.
+#: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is given neither an iteration nor a time budget.
 DEFAULT_ITERATIONS = 2000
 
 
@@ -42,6 +42,13 @@ class MultistartOptions:
     def __post_init__(self) -> None:
         positive_int(self.stall, "multistart_lm option stall")
         positive_int(self.polish, "multistart_lm option polish", minimum=0)
+
+
+def default_iterations(request: Request) -> int:
+    """The engine's iteration budget: as asked, else unlimited under a time budget, else the default."""
+    if request.max_iterations is not None:
+        return request.max_iterations
+    return 10**9 if request.deadline is not None else DEFAULT_ITERATIONS
 
 
 def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
@@ -87,7 +94,7 @@ class MultistartLM(IKSolver):
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
-        iterations = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
+        iterations = default_iterations(request)
         result = solve_local(problem.program, x0, request.rng, local_settings(request, self.options, iterations),
                              deadline=request.deadline)
         if request.callback is not None:
@@ -95,4 +102,4 @@ class MultistartLM(IKSolver):
         settings = {"start": start, "max_iterations": iterations, "restart_count": result.restarts,
                     "regularized": result.regularized, **self.options.__dict__}
         return Outcome(result.x, stop_reason(result.reached, request), result.iterations, result.evaluations,
-                       None, settings, task_errors=result.task_errors)
+                       None, settings, task_errors=result.task_errors, values=result.values)

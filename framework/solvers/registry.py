@@ -22,6 +22,7 @@ A = TypeVar("A", bound="type[Algorithm]")
 SOLVERS: dict[str, type[Algorithm]] = {}
 #: Registered problem-level IK solvers, name -> class.
 IK_SOLVERS: dict[str, type] = {}
+_DEFAULT_INSTANCES: dict[str, object] = {}  # an immutable cache: solvers keep no state between solves
 
 
 def register(name: str) -> Callable[[A], A]:
@@ -69,8 +70,15 @@ def solver_names() -> list[str]:
 
 
 def ik_solver(name: str, options=None):
-    """An IK solver instance for ``name`` with ``options``; raises :class:`SolverError` listing the names."""
+    """An IK solver instance for ``name`` with ``options``; raises :class:`SolverError` listing the names.
+
+    Solvers hold nothing but their options, so the instance with default options is made once per name.
+    """
     if name in IK_SOLVERS:
+        if not options:
+            if name not in _DEFAULT_INSTANCES:
+                _DEFAULT_INSTANCES[name] = IK_SOLVERS[name](None)
+            return _DEFAULT_INSTANCES[name]
         return IK_SOLVERS[name](options)
     if name in SOLVERS:
         from .metaheuristic import Metaheuristic

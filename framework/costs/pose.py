@@ -1,0 +1,71 @@
+"""Pose of a frame: position and orientation at once, from a ``pinocchio.SE3`` or a 4x4 homogeneous matrix."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import TaskError
+from ..robot import Robot
+from . import blocks as B
+from .base import Term, as_vector
+from .orientation import rotation_from
+from .program import Block
+
+
+def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(position (3,), rotation (3, 3))`` of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
+    ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated."""
+    if isinstance(target, pin.SE3):
+        return as_vector(target.translation, 3, lambda: f"{what} position"), rotation_from(target.rotation, what)
+    if isinstance(target, tuple) and len(target) == 2:
+        return as_vector(target[0], 3, f"{what} position"), rotation_from(target[1], what)
+    try:
+        T = np.array(target, dtype=float)
+    except (TypeError, ValueError):
+        raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair") from None
+    if T.shape != (4, 4):
+        raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair; "
+                        f"got shape {T.shape}")
+    if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]):
+        raise TaskError(f"{what}: the last row of a homogeneous matrix must be [0, 0, 0, 1]; got {T[3].tolist()}")
+    return as_vector(T[:3, 3], 3, f"{what} position"), rotation_from(T[:3, :3], what)
+
+
+class Pose(Term):
+    """Position and orientation of a frame: ``‖p − t‖ + sin(φ/2)`` (the sum of :class:`Position` and
+    :class:`Orientation` of the same target).
+
+    Residual ``(p − t, log(R_tᵀ R))`` (6,); success holds the distance to the linear tolerance [m] and the angle
+    φ to the angular one [rad]. ``target``: a ``pinocchio.SE3``, a 4x4 homogeneous matrix, or a ``(position,
+    rotation)`` pair, in the world frame.
+    """
+
+    level = "task"
+
+    def __init__(self, frame: str, target, *, name: str | None = None):
+        self.frame = frame
+        self.frames = (frame,)
+        self.name = name or f"pose[{frame}]"
+        self.set_target(target)
+
+    def set_target(self, target) -> None:
+        """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""
+        self.position, self.rotation = pose_from(target, f"pose target of {self.frame!r}")
+        self._touch()
+
+    @property
+    def target(self) -> pin.SE3:
+        """The target as a ``pinocchio.SE3``."""
+        return pin.SE3(self.rotation, self.position)
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        return (Block(B.POSITION, B.NORM, 3, self.frames, self.position, tolerance=B.TOL_LINEAR),
+                Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, self.rotation.ravel(), tolerance=B.TOL_ANGULAR))
+
+    def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
+        return {self.frame: self.position}
+
+    def __repr__(self) -> str:
+        return f"Pose({self.frame!r}, position={np.round(self.position, 6).tolist()})"
+
