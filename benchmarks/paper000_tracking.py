@@ -123,7 +123,6 @@ def run_one(path: str, solver: str, cache: Path) -> str:
         iterations_per_point=ITERATIONS,
         population=POPULATION,
         initial=Q_PREV,
-        priorities=False,  # the paper's weighted sum
         progress=False,
     )
     np.savez(

@@ -60,12 +60,22 @@ class FramePoses(NamedTuple):
         return self.rotations[:, self._index(frame)]
 
 
+def _axis_code(axis: np.ndarray) -> int:
+    """1, 2, 3 for +x, +y, +z; 4, 5, 6 for −x, −y, −z; 0 for any other axis."""
+    for code, unit in enumerate(np.vstack([np.eye(3), -np.eye(3)]), start=1):
+        if np.array_equal(axis, unit):
+            return code
+    return 0
+
+
 class PopulationKinematics:
     """Compiled forward kinematics of one robot for one tuple of frames: ``(pop, n) -> FramePoses``.
 
     The model is flattened into two tables the kernel walks: per visited joint ``[parent slot, kind code,
-    first coordinate]`` and ``[placement rotation (9, row-major), placement translation (3), axis (3)]``;
-    per frame its joint slot and ``[rotation (9), translation (3)]`` in that joint.
+    first coordinate, axis code, identity placement rotation]`` and ``[placement rotation (9, row-major),
+    placement translation (3), axis (3)]``; per frame its joint slot and ``[rotation (9), translation (3)]`` in
+    that joint. Axis code 1-6 marks a revolute joint about ±x, ±y or ±z (most URDFs): its rotation is applied
+    with 6 products instead of Rodrigues' 27.
     """
 
     def __init__(self, robot: Robot, frames: tuple[str, ...]):
@@ -83,12 +93,14 @@ class PopulationKinematics:
         order = [0, *sorted(needed)]
         slot = {jid: i for i, jid in enumerate(order)}
 
-        self._joint_int = np.zeros((len(order), 3), dtype=np.int64)
+        self._joint_int = np.zeros((len(order), 5), dtype=np.int64)
         self._joint_geo = np.zeros((len(order), 15))
         for i, jid in enumerate(order[1:], start=1):
             joint = by_pin_id[jid]
             placement = model.jointPlacements[jid]
-            self._joint_int[i] = slot[model.parents[jid]], _KIND_CODE[joint.kind], joint.index
+            identity = int(np.array_equal(placement.rotation, np.eye(3)))
+            self._joint_int[i] = (slot[model.parents[jid]], _KIND_CODE[joint.kind], joint.index,
+                                  _axis_code(joint.axis), identity)
             self._joint_geo[i] = np.concatenate([placement.rotation.ravel(), placement.translation, joint.axis])
         self._frame_slot = np.array([slot[model.frames[f].parentJoint] for f in frame_ids], dtype=np.int64)
         self._frame_geo = np.array(
@@ -157,23 +169,44 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
         W[0, c] = 0.0
     W[0, 0] = W[0, 4] = W[0, 8] = 1.0
     for j in range(1, jint.shape[0]):
-        P, kind, i = jint[j, 0], jint[j, 1], jint[j, 2]
+        P, kind, i, code = jint[j, 0], jint[j, 1], jint[j, 2], jint[j, 3]
         g = jgeo[j]
         w = W[P]
         # A = R_P · R_placement, a = R_P · t_placement + p_P
-        a00 = w[0] * g[0] + w[1] * g[3] + w[2] * g[6]
-        a01 = w[0] * g[1] + w[1] * g[4] + w[2] * g[7]
-        a02 = w[0] * g[2] + w[1] * g[5] + w[2] * g[8]
-        a10 = w[3] * g[0] + w[4] * g[3] + w[5] * g[6]
-        a11 = w[3] * g[1] + w[4] * g[4] + w[5] * g[7]
-        a12 = w[3] * g[2] + w[4] * g[5] + w[5] * g[8]
-        a20 = w[6] * g[0] + w[7] * g[3] + w[8] * g[6]
-        a21 = w[6] * g[1] + w[7] * g[4] + w[8] * g[7]
-        a22 = w[6] * g[2] + w[7] * g[5] + w[8] * g[8]
+        if jint[j, 4]:
+            a00, a01, a02, a10, a11, a12, a20, a21, a22 = w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8]
+        else:
+            a00 = w[0] * g[0] + w[1] * g[3] + w[2] * g[6]
+            a01 = w[0] * g[1] + w[1] * g[4] + w[2] * g[7]
+            a02 = w[0] * g[2] + w[1] * g[5] + w[2] * g[8]
+            a10 = w[3] * g[0] + w[4] * g[3] + w[5] * g[6]
+            a11 = w[3] * g[1] + w[4] * g[4] + w[5] * g[7]
+            a12 = w[3] * g[2] + w[4] * g[5] + w[5] * g[8]
+            a20 = w[6] * g[0] + w[7] * g[3] + w[8] * g[6]
+            a21 = w[6] * g[1] + w[7] * g[4] + w[8] * g[7]
+            a22 = w[6] * g[2] + w[7] * g[5] + w[8] * g[8]
         px = w[0] * g[9] + w[1] * g[10] + w[2] * g[11] + w[9]
         py = w[3] * g[9] + w[4] * g[10] + w[5] * g[11] + w[10]
         pz = w[6] * g[9] + w[7] * g[10] + w[8] * g[11] + w[11]
         o = W[j]
+        if kind == 0 and code > 0:  # revolute about a principal axis: rotate two columns of A
+            c, s = np.cos(x[i]), np.sin(x[i])
+            if code > 3:
+                s, code = -s, code - 3
+            if code == 3:  # z: columns 0, 1
+                o[0], o[1], o[2] = a00 * c + a01 * s, a01 * c - a00 * s, a02
+                o[3], o[4], o[5] = a10 * c + a11 * s, a11 * c - a10 * s, a12
+                o[6], o[7], o[8] = a20 * c + a21 * s, a21 * c - a20 * s, a22
+            elif code == 1:  # x: columns 1, 2
+                o[0], o[1], o[2] = a00, a01 * c + a02 * s, a02 * c - a01 * s
+                o[3], o[4], o[5] = a10, a11 * c + a12 * s, a12 * c - a11 * s
+                o[6], o[7], o[8] = a20, a21 * c + a22 * s, a22 * c - a21 * s
+            else:  # y: columns 2, 0
+                o[0], o[1], o[2] = a00 * c - a02 * s, a01, a02 * c + a00 * s
+                o[3], o[4], o[5] = a10 * c - a12 * s, a11, a12 * c + a10 * s
+                o[6], o[7], o[8] = a20 * c - a22 * s, a21, a22 * c + a20 * s
+            o[9], o[10], o[11] = px, py, pz
+            continue
         if kind == 1:  # prismatic: translate along the axis
             q = x[i]
             ux, uy, uz = g[12] * q, g[13] * q, g[14] * q
