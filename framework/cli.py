@@ -1,4 +1,5 @@
-"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``tasks``, ``run TASK``, ``bench TASK...``, ``replay FILE``.
+"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``tasks``, ``solvers``, ``run TASK``, ``bench TASK...``,
+``replay FILE``.
 
 Exit codes: 0 success; 1 the run finished but some case missed its tolerance; 2 bad input (missing file,
 bad TOML, unknown robot/solver/frame, invalid weights: one clear line, no traceback); 130 interrupted.
@@ -49,6 +50,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="write a rerun recording of the run (open it with `metaik replay FILE.rrd`)")
 
     sub.add_parser("tasks", help="list the shipped task files")
+    sub.add_parser("solvers", help="list the solvers with their options, defaults and references")
     add_bench_command(sub)
     add_replay_command(sub)
     return parser
@@ -58,11 +60,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     console = Console()
     try:
-        commands = {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks, "bench": bench_command,
-                    "replay": replay_command}
+        commands = {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks, "solvers": _solvers,
+                    "bench": bench_command, "replay": replay_command}
         return commands[args.command](args, console)
     except MetaikError as err:
-        Console(stderr=True).print(f"[bold red]error:[/] {err}", highlight=False, markup=True, soft_wrap=True)
+        Console(stderr=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False, markup=True,
+                                   soft_wrap=True)
         return EXIT_INPUT
     except KeyboardInterrupt:
         Console(stderr=True).print("interrupted")
@@ -80,6 +83,22 @@ def _robots(args, console: Console) -> int:
         robot = load_robot(name)
         groups = ", ".join(f"{g} ({len(i)})" for g, i in robot.groups.items())
         table.add_row(name, str(robot.n), ", ".join(robot.end_effectors), groups, entry.get("description", ""))
+    console.print(table)
+    return EXIT_OK
+
+
+def _solvers(args, console: Console) -> int:
+    from .solvers import IK_SOLVERS, SOLVERS, ik_solver
+
+    table = Table(title="Solvers: solve(problem, name, options={...}); metaik run TASK --solver NAME")
+    for column in ("name", "kind", "options (defaults)", "reference"):
+        table.add_column(column, overflow="fold")
+    for name in [*sorted(IK_SOLVERS), *sorted(SOLVERS)]:
+        solver = ik_solver(name)
+        kind = "local engine" if solver.uses_jacobians else "metaheuristic"
+        defaults = ", ".join(f"{k}={v!r}" for k, v in solver.defaults().items()) or "—"
+        reference = solver.reference or (SOLVERS[name].__doc__ or "").strip().splitlines()[0]
+        table.add_row(name, kind, escape(defaults), escape(reference))
     console.print(table)
     return EXIT_OK
 

@@ -9,6 +9,7 @@ its tolerance in its own unit — positions and relative positions within ``tole
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -138,7 +139,7 @@ def solve(
 
 def _positive(value: Any) -> bool:
     return isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool) \
-        and bool(np.isfinite(value)) and value > 0
+        and math.isfinite(value) and value > 0
 
 
 def _lazy_generator(seed: int | np.random.Generator) -> Callable[[], np.random.Generator]:

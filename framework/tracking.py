@@ -445,7 +445,7 @@ def _warm_start(
     """Warm-start points ``(k, n)`` (or ``None``: cold) and solver options for waypoint ``k`` (see :func:`track`);
     ``carry``: the solver continues its search distribution, ``state``: the previous solve's
     :attr:`~framework.solve.IKResult.state` (empty at the first waypoint)."""
-    defaults = method.defaults()
+    defaults = method.option_names
     if not warm_start:  # a local solver would otherwise start from the motion terms' previous configuration
         return None, ({"warm_start": False, **options} if "warm_start" in defaults else options)
     seeds = [predictor(problem, previous), previous] if predict else [previous]

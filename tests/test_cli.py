@@ -162,3 +162,20 @@ def test_bench_through_the_command_line(tmp_path, capsys):
     assert len((out / "results.jsonl").read_text().splitlines()) == 4
     table = capsys.readouterr().out
     assert "hybrid" in table and "de" in table
+
+
+def test_solvers_lists_every_solver_with_its_defaults(capsys):
+    from framework.solvers import solver_names
+
+    assert main(["solvers"]) == EXIT_OK
+    out = capsys.readouterr().out
+    for name in solver_names():
+        assert name in out
+    assert "stall=6" in out and "sigma0=None" in out
+
+
+def test_error_messages_keep_their_brackets(tmp_path, capsys):
+    path = tmp_path / "no_task_table.toml"
+    path.write_text('[solver]\nname = "hybrid"\n')
+    assert main(["run", str(path)]) == EXIT_INPUT
+    assert "missing [task] table" in capsys.readouterr().err

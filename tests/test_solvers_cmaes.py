@@ -92,3 +92,25 @@ def test_cmaes_fast_rejects_a_bad_covariance(covariance):
     with pytest.raises(SolverError, match="covariance"):
         minimize(sphere, BOX, solver="cmaes_fast", rng=np.random.default_rng(0), max_iterations=2,
                  options={"covariance": covariance})
+
+
+@pytest.mark.parametrize("bounds", ["resample", "clip", "penalty"])
+def test_compiled_loop_is_the_ask_tell_loop(bounds):
+    """``solve(problem, "cmaes_fast")`` runs the whole loop compiled; it must give bitwise the same generations as
+    the shared Python loop ``minimize`` (same random numbers, repairs, updates), warm start included."""
+    import framework as fw
+    from framework.problem import Problem
+    from framework.solve import solve
+    from framework.solvers import minimize
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    prev = robot.middle
+    problem = Problem(robot, 1.2 * fw.Position("arm1_ee", [0.5, -0.2, 0.45]) + 0.4 * fw.Motion("all", prev),
+                      bounds=bounds)
+    compiled = solve(problem, "cmaes_fast", seed=4, max_iterations=120, initial=prev)
+    loop = minimize(problem.cost, (robot.lower, robot.upper), solver="cmaes_fast", rng=np.random.default_rng(4),
+                    max_iterations=120, population=30, initial=prev[None], bounds=problem.repair_mode)
+    np.testing.assert_array_equal(compiled.configuration, loop.x)
+    np.testing.assert_array_equal(compiled.history, loop.history)
+    np.testing.assert_array_equal(compiled.state["covariance"], loop.state["covariance"])
+    assert compiled.evaluations == loop.evaluations

@@ -93,6 +93,7 @@ class _Layout:
         self.chains = kinematics.chains
         slot = {f: i for i, f in enumerate(frames)}
         rows, indices, scales, self.block_term = [], [], [], []
+        self.param_slices: list[list[tuple[int, int]]] = [[] for _ in terms]  # per term, per block
         self.references: list[tuple[slice, slice]] = []  # (params, idx) of the regularizers' COORDINATES blocks
         pptr = iptr = 0
         for k, (level, blocks) in enumerate(zip(levels, packed)):
@@ -106,6 +107,7 @@ class _Layout:
                 fb = slot[block.frames[1]] if len(block.frames) > 1 else -1
                 rows.append([block.kind, block.rho, block.tolerance, level, block.rows, fa, fb, pptr, iptr, k, count])
                 self.block_term.append(k)
+                self.param_slices[k].append((pptr, pptr + size))
                 scales.append(block.scale)
                 if block.kind == B.COORDINATES and level == B.LEVEL_REGULARIZER:
                     self.references.append((slice(pptr, pptr + size), slice(iptr, iptr + count)))
@@ -204,15 +206,13 @@ class Program:
 
     def refresh(self) -> None:
         """Re-pack the parameters of terms whose targets changed since the last call (a few µs)."""
+        params = self.prog[2]
         for k, term in enumerate(self.terms):
             if term.version != self._versions[k]:
                 self._versions[k] = term.version
-                bint, params = self.prog[0], self.prog[2]
-                rows = np.flatnonzero(bint[:, B.TERM] == k)
-                for b, block in zip(rows, term.blocks(self.robot) or ()):
-                    start = bint[b, B.PPTR]
-                    value = np.ravel(block.params)
-                    params[start : start + value.size] = value
+                blocks, _ = term.packed(self.robot)
+                for (start, stop), block in zip(self.layout.param_slices[k], blocks or ()):
+                    params[start:stop] = block.params
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` weighted sums of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""

@@ -208,16 +208,18 @@ def reaching_is_optimal(program: Program, x: np.ndarray, multipliers: np.ndarray
                                      np.ascontiguousarray(multipliers, dtype=float)))
 
 
-def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray,
-                      settings: LocalSettings = LocalSettings(), *, deadline: float | None = None
-                      ) -> tuple[np.ndarray, int]:
-    """The weighted sum of every task and regularizer term minimized from a point on the task, by active sets.
+def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray | None,
+                      settings: LocalSettings = LocalSettings(), *, deadline: float | None = None,
+                      near: float = 1e-6) -> tuple[np.ndarray, int]:
+    """The weighted sum of every task and regularizer term minimized from ``x0``, by active sets of task blocks.
 
-    ``x0`` reaches the task with the regularizers minimized there and ``multipliers`` are the task's there. Each
-    round releases the task blocks that are no exact penalty for their multipliers (leaving them lowers the
-    sum: :func:`~framework.engine.newton.exact_penalty`) into the objective, and minimizes again on the blocks
-    still held (:func:`~framework.engine.newton.regularize` with those levels), until every held block is an
-    exact penalty. Blocks that pay for themselves stay exactly on their targets (no kink to smooth over).
+    Task blocks are *held* (kept exactly on their targets) or *released* into the objective. From a point on the
+    task with its ``multipliers`` every block starts held; without multipliers (any other start) the blocks
+    within ``near`` of their targets are held and the others released. Each round releases the held blocks that
+    are no exact penalty for their multipliers (leaving them lowers the sum: :func:`~framework.engine.newton.
+    exact_penalty`) and minimizes again on the blocks still held (:func:`~framework.engine.newton.regularize`
+    with those levels), until every held block is an exact penalty. Blocks that pay for themselves stay exactly
+    on their targets (no kink to smooth over).
 
     Returns ``(x, evaluations)``.
     """
@@ -226,23 +228,31 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray,
     bint = program.prog[0].copy()
     bflt = program.prog[1]
     x = np.array(x0, dtype=float)
-    lam = np.asarray(multipliers, dtype=float)
     stats = np.zeros(3, dtype=np.int64)
     deadline_ns = 0 if deadline is None else int(deadline * 1e9)
     evaluations = 0
-    for _ in range(int(np.sum(bint[:, LEVEL] == LEVEL_TASK))):
-        held = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
-        sizes = bint[held, ROWS]
-        norms = np.array([np.linalg.norm(part) for part in np.split(lam, np.cumsum(sizes)[:-1])]) if held.size \
-            else np.zeros(0)
-        slopes = np.where(bint[held, RHO] == HALFSIN, 0.5, 1.0)
-        release = held[norms >= bflt[held, WEIGHT] * bflt[held, SCALE] * slopes]
-        if release.size == 0:
-            break
-        bint[release, LEVEL] = LEVEL_REGULARIZER
+    task = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
+    held = np.ones(task.size, dtype=bool) if multipliers is not None else task_errors(program, x) <= near
+    lam = None if multipliers is None else np.asarray(multipliers, dtype=float)
+    for _ in range(2 * task.size + 2):
+        if lam is not None:  # release the held blocks that are no exact penalty for their multipliers
+            rows = bint[task[held], ROWS]
+            norms = np.array([np.linalg.norm(p) for p in np.split(lam, np.cumsum(rows)[:-1])]) if rows.size \
+                else np.zeros(0)
+            blocks = task[held]
+            slopes = np.where(bint[blocks, RHO] == HALFSIN, 0.5, 1.0)
+            pays = norms < bflt[blocks, WEIGHT] * bflt[blocks, SCALE] * slopes
+            new = held.copy()
+            new[np.flatnonzero(held)[~pays]] = False
+            new |= task_errors(program, x) <= near  # released blocks sitting on their target: hold them exactly
+            if np.array_equal(new, held):
+                break
+            held = new
+        bint[task] = program.prog[0][task]
+        bint[task[~held], LEVEL] = LEVEL_REGULARIZER
         prog = (bint, *program.prog[1:])
-        lam = np.zeros(int(bint[bint[:, LEVEL] == LEVEL_TASK, ROWS].sum()))
-        errors = np.zeros(int(np.sum(bint[:, LEVEL] == LEVEL_TASK)))
+        lam = np.zeros(int(bint[task[held], ROWS].sum()))
+        errors = np.zeros(int(held.sum()))
         newton.regularize(x, lower, upper, box_wrap, program.kin, prog, settings.smoothing,
                           settings.regularize_iterations, deadline_ns, lam, errors, np.zeros(len(program.terms)),
                           stats)

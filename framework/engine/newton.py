@@ -22,7 +22,7 @@ from ..costs.kernels import level_value, linearize, task_errors, term_values, wo
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, least_norm_step, lu_solve
-from .reach import project
+from .reach import bounded_step, project
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
 MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
@@ -105,8 +105,9 @@ def _rho_from(rho, scale, s, r, row, rows) -> float:
 
 
 @numba.njit(cache=True)
-def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, steps, target) -> float:
-    """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target``; returns the final ``‖r‖``."""
+def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target) -> float:
+    """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
+    the step would push through are left out of it); returns the final ``‖r‖``."""
     n = x.shape[0]
     e = 0.0
     for i in range(m):
@@ -115,7 +116,7 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, steps, ta
     for _ in range(steps):
         if e <= target:
             break
-        if not least_norm_step(ws[4][:m], ws[3][:m], 1e-24, A, L, y, dx):
+        if not bounded_step(x, ws[4][:m], ws[3][:m], 1e-24, lower, upper, box_wrap, Jc, A, L, y, dx):
             break
         for i in range(n):
             x[i] += dx[i]
@@ -165,7 +166,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
            np.empty((m, m)), np.empty((m, m)), np.empty(max(m, n)), np.empty(n), np.zeros(m), np.zeros(m),
            np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + m, n + m)), np.empty((n + m, n + m + 1)),
            np.empty(n + m), np.empty(n + m), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
-           np.empty(big), np.empty((n, n)))
+           np.empty(big), np.empty((n, n)), np.empty((m, n)))
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
     tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
@@ -174,7 +175,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     lam, lam_neg, gl, fidx = borrow(own[10]), borrow(own[11]), borrow(own[12]), borrow(own[13])
     K, M, rhs, sol, xt, dx = borrow(own[14]), borrow(own[15]), borrow(own[16]), borrow(own[17]), \
         borrow(own[18]), borrow(own[19])
-    gr, Hr, mu_r, Hlb = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23])
+    gr, Hr, mu_r, Hlb, Jc = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23]), borrow(own[24])
     linearize(x, 1, kin, prog, cur, True, 1)
     linearize(x, 2, kin, prog, cur_r, True, 0)
     evaluations = 1
@@ -262,7 +263,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 xt[i] = x[i] + alpha * dx[i]
             project(xt, lower, upper, box_wrap)
             linearize(xt, 1, kin, prog, tri, True, 1)
-            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am, Lm, ym, dxm, RESTORE_STEPS, feasible)
+            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, feasible)
             linearize(xt, 2, kin, prog, tri_r, True, 0)
             evaluations += 1
             Gt = level_value(2, prog, tri_r[3], True)
@@ -294,7 +295,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if mu > MU_MAX or trust < 1e-12:
                 status = STALLED
                 break
-    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, RESTORE_STEPS, 0.0)  # to the last bit
+    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, 0.0)  # to the last bit
     linearize(x, 2, kin, prog, cur_r, True, 0)
     objective_derivatives(2, prog, cur_r, smoothing, False, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
     _multipliers(cur[4][:m], g, Am, Lm, ym, multipliers)

@@ -27,6 +27,7 @@ import numpy as np
 from framework.errors import SolverError
 from framework.solvers.base import Algorithm
 from framework.solvers.cmaes import start_point_and_step
+from framework.costs.kernels import population_cost
 from framework.solvers.registry import register
 
 #: Condition number of C above which it is regularized, and relative floor of its eigenvalues.
@@ -110,6 +111,27 @@ class CMAESFast(Algorithm):
         self.generation = g
         if g - self._eigen_generation > self.population / (self.c1 + self.cmu) / self.n / 10:
             self._update_eigensystem()
+
+    def run_compiled(self, program, repair_mode: str, max_iterations: int) -> tuple[np.ndarray, float, np.ndarray,
+                                                                                      int]:
+        """The whole ask/tell loop compiled, on a packed problem (:class:`~framework.costs.Program`): the same
+        generations as :func:`~framework.solvers.base.minimize` with this algorithm (same random numbers, same
+        repairs, same updates), without its Python overhead per generation. No callback, no other stop rule.
+
+        Returns ``(best x, best f, history (iterations,), evaluations)``; the algorithm's state is updated.
+        """
+        mode = {"resample": 0, "clip": 1, "none": 2}[repair_mode]
+        initial = np.zeros((0, self.n)) if self.initial is None else self.initial
+        best_x = np.empty(self.n)
+        history = np.empty(max_iterations)
+        program.refresh()
+        box = self.box
+        out = _run(self.rng, program.kin, program.prog, box.lower, box.upper, mode, max_iterations, initial,
+                   self.mean, self.ps, self.pc, self.C, self.B, self.D, self.weights,
+                   np.array([self.sigma, self.cs, self.cc, self.c1, self.cmu, self.mueff, self.damps, self.chi_n,
+                             self.max_step, self._max_sigma, self.population]), best_x, history)
+        best_f, self.sigma, evaluations, self.generation, self._eigen_generation = out
+        return best_x, best_f, history, evaluations
 
     def _update_eigensystem(self) -> None:
         """Refresh ``B``, ``D`` from ``C`` (symmetrized, regularized above ``MAX_CONDITION``)."""
@@ -212,3 +234,82 @@ def _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, m
             C[i, j] = decay * C[i, j] + c1 * pc[i] * pc[j] + cmu * s
     new = sigma * np.exp((cs / damps) * (ps_norm / chi_n - 1))
     return min(max(new, 1e-300), max_sigma), hsig
+
+
+@numba.njit(cache=True)
+def _eigensystem(C, B, D):
+    """``B, D`` from ``C`` (symmetrized, regularized above ``MAX_CONDITION``), as ``_update_eigensystem``."""
+    n = C.shape[0]
+    for i in range(n):
+        for j in range(i + 1, n):
+            v = 0.5 * (C[i, j] + C[j, i])
+            C[i, j] = v
+            C[j, i] = v
+    eigvals, vectors = np.linalg.eigh(C)
+    top = max(eigvals[-1], 1e-300)
+    if eigvals[0] < top / MAX_CONDITION:
+        shift = top / MAX_CONDITION - min(eigvals[0], 0.0)
+        for i in range(n):
+            C[i, i] += shift
+        eigvals, vectors = np.linalg.eigh(C)
+    B[:, :] = vectors
+    for i in range(n):
+        D[i] = np.sqrt(max(eigvals[i], 1e-300))
+
+
+@numba.njit(cache=True)
+def _run(rng, kin, prog, lower, upper, mode, max_iterations, initial, mean, ps, pc, C, B, D, w, consts, best_x,
+         history):
+    """``max_iterations`` generations of ask / repair / evaluate / tell (see :meth:`CMAESFast.run_compiled`).
+
+    Returns ``(best f, sigma, evaluations, generation, eigen generation)``; ``mean, ps, pc, C, B, D`` are updated
+    in place, ``best_x`` and ``history`` written."""
+    sigma, cs, cc, c1, cmu, mueff = consts[0], consts[1], consts[2], consts[3], consts[4], consts[5]
+    damps, chi_n, max_step, max_sigma, lam = consts[6], consts[7], consts[8], consts[9], int(consts[10])
+    n, mu = mean.shape[0], w.shape[0]
+    best_f = np.inf
+    evaluations, generation, eigen_generation = 0, 0, 0
+    F = np.empty(lam)
+    for iteration in range(max_iterations):
+        z = rng.standard_normal((lam, n))
+        X = _sample(mean, sigma, B, D, z)
+        if generation == 0 and initial.shape[0] > 0:
+            for k in range(min(lam - 1, initial.shape[0])):
+                X[k] = initial[k]
+        asked = X.copy()
+        if mode != 2:  # repair: rows out of the box resampled whole (mode 0), or clipped (mode 1)
+            for k in range(lam):
+                bad = False
+                for i in range(n):
+                    v = X[k, i]
+                    if mode == 0 and not (lower[i] <= v <= upper[i]):
+                        bad = True
+                    elif mode == 1:
+                        if not np.isfinite(v):
+                            bad = True
+                        elif v < lower[i]:
+                            X[k, i] = lower[i]
+                        elif v > upper[i]:
+                            X[k, i] = upper[i]
+                if bad:
+                    u = rng.random(n)
+                    for i in range(n):
+                        X[k, i] = lower[i] + u[i] * (upper[i] - lower[i])
+        population_cost(X, kin, prog, F)
+        for k in range(lam):
+            if np.isnan(F[k]):
+                F[k] = np.inf
+        evaluations += lam
+        i_best = np.argmin(F)
+        if F[i_best] < best_f:
+            best_f = F[i_best]
+            best_x[:] = X[i_best]
+        order = np.argsort(F, kind="mergesort")[:mu]
+        generation += 1
+        sigma, hsig = _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, mueff, damps,
+                              chi_n, max_step, float(generation), max_sigma)
+        if generation - eigen_generation > lam / (c1 + cmu) / n / 10:
+            eigen_generation = generation
+            _eigensystem(C, B, D)
+        history[iteration] = best_f
+    return best_f, sigma, evaluations, generation, eigen_generation

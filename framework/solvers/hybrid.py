@@ -113,7 +113,7 @@ class Hybrid(IKSolver):
         if start == "middle" or not o.restarts:
             best = engine(x0)
         else:  # a warm start's basin first (a slow descent near a singularity is not a reason to leave it) ...
-            best = engine(x0, replace(settings, restarts=False, stall=WARM_STALL))
+            best = engine(x0, _in_basin(settings))
             if not best.reached and request.time_left() > 0:  # ... then random restarts
                 best = min((best, engine(x0)), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
@@ -121,12 +121,20 @@ class Hybrid(IKSolver):
             cold = engine(global_phase(None, GLOBAL_ITERATIONS))
             best = min((best, cold), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
         x, errors, values, weighted = best.x, best.task_errors, best.values, False
-        if not problem.priorities and best.reached and not reaching_is_optimal(problem.program, x, best.multipliers):
-            weighted = True  # reaching costs more than it gains under these weights: the sum as it stands
-            y, spent = minimize_weighted(problem.program, x, best.multipliers, settings, deadline=request.deadline)
-            z, _, more = minimize_sum(problem.program, x0, settings, deadline=request.deadline)  # another basin
-            evaluations += spent + more
-            points = [x, y, z]
+        if not problem.priorities and (not best.reached or not reaching_is_optimal(problem.program, x,
+                                                                                  best.multipliers)):
+            # the weighted sum decides: reaching costs more than it gains, or the task is out of reach
+            weighted = True
+            points = [x]
+            if best.reached:  # release the task terms that do not pay for themselves
+                y, spent = minimize_weighted(problem.program, x, best.multipliers, settings, deadline=request.deadline)
+                evaluations += spent
+                points.append(y)
+            for origin in (x, x0) if not best.reached else (x0,):  # damped Newton on the whole sum
+                z, _, more = minimize_sum(problem.program, origin, settings, deadline=request.deadline)
+                z, last = minimize_weighted(problem.program, z, None, settings, deadline=request.deadline)
+                evaluations += more + last
+                points.append(z)
             x, errors, values = points[int(np.argmin(problem.cost(np.array(points))))], None, None
             counter.report(x)
         if errors is None:
@@ -140,6 +148,19 @@ class Hybrid(IKSolver):
                   "population": request.population}
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values)
+
+
+def _in_basin(settings: LocalSettings) -> LocalSettings:
+    """The settings of a descent that stays in the warm start's basin (no restart, a patient stall rule)."""
+    cached = _BASIN.get(settings)
+    if cached is None:
+        if len(_BASIN) > 256:
+            _BASIN.clear()
+        cached = _BASIN[settings] = replace(settings, restarts=False, stall=WARM_STALL)
+    return cached
+
+
+_BASIN: dict[LocalSettings, LocalSettings] = {}
 
 
 class _Counter:

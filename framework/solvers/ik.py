@@ -110,6 +110,11 @@ class IKSolver(ABC):
         """Option name -> default value."""
         return {f.name: f.default for f in dataclasses.fields(cls.Options)}
 
+    @property
+    def option_names(self) -> frozenset[str]:
+        """The names of the solver's options."""
+        return frozenset(self.defaults())
+
 
 def parse_options(options_type: type, options: Mapping[str, Any] | None, solver: str):
     """An ``options_type`` instance from a mapping; unknown names raise :class:`SolverError` listing the known."""

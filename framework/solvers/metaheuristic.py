@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
 
-from .base import minimize
+
+from .base import Box, OptimizeResult, minimize
 from .ik import IKSolver, Outcome, Request
 from .registry import get_solver
 
@@ -43,10 +45,15 @@ class Metaheuristic(IKSolver):
                 return stop or (request.stop_at_tolerance and within(problem, best_x, request))
 
         iterations = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
-        run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=self.algorithm,
-                       rng=request.rng(), max_iterations=iterations, population=request.population,
-                       initial=request.initial, bounds=problem.repair_mode, options=self.options,
-                       callback=callback, progress=request.progress)
+        cls = get_solver(self.algorithm)
+        if callback is None and not request.progress and hasattr(cls, "run_compiled") \
+                and not problem.program.layout.generic:
+            run = _compiled(cls, problem, request, iterations, self.options)
+        else:
+            run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=self.algorithm,
+                           rng=request.rng(), max_iterations=iterations, population=request.population,
+                           initial=request.initial, bounds=problem.repair_mode, options=self.options,
+                           callback=callback, progress=request.progress)
         stop = run.stop_reason
         if stop == "callback":
             if request.stop_at_tolerance and within(problem, run.x, request):
@@ -64,3 +71,19 @@ def within(problem, x: np.ndarray, request: Request) -> bool:
     errors = task_errors(problem.program, x)
     angular = problem.program.task_angular
     return bool(np.all(np.where(angular, errors <= request.angle_tolerance, errors <= request.tolerance)))
+
+
+def _compiled(cls, problem, request: Request, iterations: int, options: dict) -> OptimizeResult:
+    """The algorithm's whole loop compiled on the problem's packed terms (an algorithm that has one, with no
+    callback to call between generations): the same generations as :func:`~framework.solvers.base.minimize`."""
+    start = time.perf_counter()
+    box = Box(problem.robot.lower, problem.robot.upper)
+    algorithm = cls(box.n, box, request.population, request.rng(), options, request.initial,
+                    max_iterations=int(iterations))
+    x, f, history, evaluations = algorithm.run_compiled(problem.program, problem.repair_mode, int(iterations))
+    settings = {"solver": cls.name, "population": algorithm.population, "max_iterations": int(iterations),
+                "bounds": problem.repair_mode, "f_target": None, "max_evaluations": None, "stagnation": None,
+                **algorithm.settings}
+    return OptimizeResult(x=x, f=float(f), iterations=len(history), evaluations=int(evaluations), history=history,
+                          stop_reason="max_iterations", wall_time=time.perf_counter() - start, solver=cls.name,
+                          settings=settings, state=algorithm.state)

@@ -1,0 +1,134 @@
+"""The compiled local engine: reaching poses, minimizing motion on the task, priorities, continuous joints.
+
+Every answer is checked with Pinocchio's own FK of the model (independent of the compiled kernels)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.engine import LocalSettings, residuals, solve_local
+from framework.problem import Problem
+
+
+def pose_errors(robot: fw.Robot, x: np.ndarray, frame: str, target: pin.SE3) -> tuple[float, float]:
+    M = robot.frame_placement(x, frame)
+    return (float(np.linalg.norm(M.translation - target.translation)),
+            float(np.linalg.norm(pin.log3(target.rotation.T @ M.rotation))))
+
+
+@pytest.fixture(scope="module")
+def panda(erd) -> fw.Robot:
+    return fw.load_robot(erd / "panda_description" / "urdf" / "panda.urdf",
+                         joints=[f"panda_joint{i}" for i in range(1, 8)])
+
+
+def test_pose_ik_reaches_random_poses_where_one_descent_does_not(panda, rng):
+    """100 FK-sampled Panda poses: the default solver reaches every one to 1e-9 m / 1e-9 rad (by Pinocchio FK);
+    a single Levenberg-Marquardt descent from the middle of the limits (no restart) reaches far fewer."""
+    tip = "panda_hand_tcp"
+    single = LocalSettings(tolerance=1e-9, restarts=False, max_iterations=200)
+    reached = descent = 0
+    for k, x in enumerate(panda.random_configurations(rng, 100)):
+        target = panda.frame_placement(x, tip)
+        problem = Problem(panda, fw.Pose(tip, target))
+        result = fw.solve(problem, tolerance=1e-9, seed=k)
+        dp, da = pose_errors(panda, result.configuration, tip, target)
+        reached += result.success and dp <= 1e-9 and da <= 1e-9
+        assert result.errors[f"pose[{tip}].distance"] == pytest.approx(dp, abs=1e-12)
+        descent += solve_local(problem.program, panda.middle, np.random.default_rng(k), single).reached
+    assert reached == 100
+    assert descent <= 95  # measured 80-90: restarts are what makes it reliable
+
+
+def test_pose_targets_as_se3_matrix_or_pair_agree(panda, rng):
+    tip = "panda_hand_tcp"
+    T = panda.frame_placement(panda.random_configurations(rng, 1)[0], tip)
+    quat = pin.Quaternion(T.rotation).coeffs()  # (x, y, z, w)
+    forms = [T, T.homogeneous, (T.translation, T.rotation), (T.translation, quat)]
+    terms = [fw.Pose(tip, form) for form in forms]
+    for term in terms[1:]:
+        np.testing.assert_allclose(term.position, terms[0].position, atol=1e-15)
+        np.testing.assert_allclose(term.rotation, terms[0].rotation, atol=1e-12)
+    bad = T.homogeneous.copy()
+    bad[3] = [0, 0, 1, 1]
+    with pytest.raises(fw.TaskError, match="last row"):
+        fw.Pose(tip, bad)
+    with pytest.raises(fw.TaskError, match="4x4"):
+        fw.Pose(tip, np.eye(3))
+
+
+def test_motion_is_minimized_on_the_task(rng):
+    """Paper 000's target 1: at the engine's answer the motion terms' gradient has no component along the task's
+    null space (the first-order condition of 'least motion on the task'), by finite differences of the motion
+    terms' values and the task Jacobian."""
+    robot = fw.load_robot("youbot_dual_mobile")
+    q_prev = np.r_[0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.pi / 2, np.pi / 2,
+                   -np.pi / 4, np.pi / 4, 0]
+    t1, offset = np.array([0.5, -0.2, 0.45]), np.array([0.2, -0.3, -0.2])
+    motion = 0.1 * fw.Motion("base", q_prev) + 0.4 * fw.Motion("arm1", q_prev) + 0.4 * fw.Motion("arm2", q_prev)
+    problem = Problem(robot, 1.2 * fw.Position("arm1_ee", t1) + 1.2 * fw.Position("arm2_ee", t1 + offset) + motion)
+    result = fw.solve(problem, tolerance=1e-12)
+    x = result.configuration
+    assert result.success and max(result.errors.values()) < 1e-12
+    regularizers = Problem(robot, motion)
+    h = 1e-6
+    E = np.eye(robot.n) * h
+    gradient = (regularizers.cost(x + E) - regularizers.cost(x - E)) / (2 * h)
+    _, J = residuals(problem.program, x)
+    _, s, Vt = np.linalg.svd(J)
+    null = Vt[int(np.sum(s > 1e-9 * s[0])):]
+    assert np.abs(null @ gradient).max() < 1e-6  # a random point on the task: ~0.1
+    assert np.abs(null @ gradient).max() < 1e-3 * np.abs(gradient).max()
+
+
+def test_priorities_reach_whatever_the_weights_and_weighted_sums_do_not():
+    """Position weighted 0.01 against motion weighted 1: the task first reaches; the weighted sum (papers) stays
+    short of the target with a lower weighted cost than the reaching answer."""
+    robot = fw.load_robot("youbot_arm")
+    prev = robot.middle
+    target = robot.frame_placement(prev, "ee").translation + [0.05, 0.0, 0.08]
+    objective = 0.01 * fw.Position("ee", target) + 1.0 * fw.Motion("arm", prev)
+    first = fw.solve(Problem(robot, objective), seed=0)
+    weighted = fw.solve(Problem(robot, objective, priorities=False), seed=0)
+    assert first.success and first.errors["position[ee]"] < 1e-12
+    assert not weighted.success and weighted.cost < first.cost
+
+
+def test_continuous_joints_wrap_in_motion_and_in_the_box(erd):
+    """PR2's forearm and wrist rolls are continuous: a motion from 3.1 to -3.1 rad is 0.083 rad, not 6.2, and the
+    engine reaches a two-hand pose target through the wrap (answers checked by Pinocchio FK)."""
+    joints = ["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in (
+        "shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex", "wrist_roll")]
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    roll = robot.joint("l_forearm_roll_joint").index
+    previous, x = robot.middle.copy(), robot.middle.copy()
+    previous[roll], x[roll] = 3.1, -3.1
+    value = Problem(robot, fw.Motion("l_forearm_roll_joint", previous)).values(x)[0, 0]
+    assert value == pytest.approx(2 * np.pi - 6.2, abs=1e-12)
+    rng = np.random.default_rng(3)
+    hands = ("l_gripper_tool_frame", "r_gripper_tool_frame")
+    for k in range(10):
+        goal = robot.random_configurations(rng, 1)[0]
+        goal[roll] = np.pi - 0.05  # next to the seam
+        targets = [robot.frame_placement(goal, hand) for hand in hands]
+        rest = robot.middle.copy()
+        rest[roll] = -np.pi + 0.05  # 0.1 rad away across the seam, 6.18 rad the long way
+        objective = fw.Pose(hands[0], targets[0]) + fw.Pose(hands[1], targets[1]) + 0.1 * fw.Motion("all", rest)
+        result = fw.solve(Problem(robot, objective), seed=k, tolerance=1e-9)
+        assert result.success
+        for hand, target in zip(hands, targets):
+            dp, da = pose_errors(robot, result.configuration, hand, target)
+            assert dp <= 1e-9 and da <= 1e-9
+
+
+def test_time_budget_stops_the_engine():
+    """An unreachable target under a time budget: the engine restarts until the budget, then reports it."""
+    robot = fw.load_robot("puma560")
+    problem = Problem(robot, fw.Position("ee", [5.0, 0.0, 0.0]))
+    fw.solve(problem, max_iterations=10)  # the compiled code loaded (the first call in a process takes ~0.3 s)
+    result = fw.solve(problem, time_budget=0.003, seed=0)
+    assert not result.success and result.stop_reason == "time_budget"
+    assert result.settings["restart_count"] > 0
