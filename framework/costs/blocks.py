@@ -189,11 +189,14 @@ def rho_value(rho, scale, r, row, rows) -> float:
 
 
 @numba.njit(cache=True)
-def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H):
+def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H, majorize_below=0.0):
     """Gradient ``g (rows,)`` and Hessian ``H (rows, rows)`` of the block value with respect to its residual.
 
     The norm-like ρ are not differentiable at ``r = 0``; there they are smoothed as ``√(‖r‖² + ε²)`` (``|r|`` per
     component for L1) with ``ε = smoothing``, which changes the value by at most ``scale · ε`` per block.
+    A norm shorter than ``majorize_below`` gets the majorizing curvature ``scale/‖r‖ · I`` instead of its own
+    ``scale/‖r‖ · (I − uuᵀ)`` (flat along ``u``): a Newton step then moves it straight to (not past) zero, where
+    an optimum with a joint group at rest sits.
     """
     for a in range(rows):
         for c in range(rows):
@@ -216,10 +219,11 @@ def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H):
         s += r[row + a] * r[row + a]
     if rho == NORM:
         d = np.sqrt(s + smoothing * smoothing)
+        radial = 0.0 if d < majorize_below else 1.0
         for a in range(rows):
             g[a] = scale * r[row + a] / d
             for c in range(rows):
-                H[a, c] = -scale * r[row + a] * r[row + c] / (d * d * d)
+                H[a, c] = -radial * scale * r[row + a] * r[row + c] / (d * d * d)
             H[a, a] += scale / d
         return
     # HALFSIN: ρ = s sin(φ/2), φ = ‖r‖ (smoothed): ∇ρ = ½ s cos(φ/2) u, ∇²ρ = s[½cos(φ/2)/φ (I − uuᵀ) − ¼ sin(φ/2) uuᵀ]

@@ -46,10 +46,12 @@ def _rows_of(prog, level) -> int:
 
 
 @numba.njit(cache=True)
-def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu) -> float:
+def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu,
+                          majorize_below=0.0) -> float:
     """Weighted value, gradient ``g (n,)`` and Hessian ``H (n, n)`` of the blocks of ``level`` (``< 0``: all
     levels 1 and 2) from the residual rows in ``ws``; ``curvature`` adds their second-order kinematics.
-    ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block."""
+    ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block; norms shorter
+    than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``)."""
     bint, bflt, params = prog[0], prog[1], prog[2]
     out, Jf, r, Jr = ws[0], ws[2], ws[3], ws[4]
     n = g.shape[0]
@@ -61,7 +63,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
             continue
         rows, w = bint[b, ROWS], bflt[b, WEIGHT]
-        rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr)
+        rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr, majorize_below)
         s = 0.0
         for a in range(rows):
             s += r[row + a] * r[row + a]
@@ -187,7 +189,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
     _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
-    mu, trust = MU_START, TRUST_START
+    mu, trust, last_step = MU_START, TRUST_START, 0.0
     status, iterations, accepted = ITERATIONS, 0, 0
     bint = prog[0]
     while iterations < max_iterations:
@@ -195,8 +197,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             status = DEADLINE
             break
         iterations += 1
-        if not fresh:
-            objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+        if not fresh:  # a norm shorter than the last step gets its majorizing curvature
+            objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
+                                  2.0 * last_step)
             fresh = True
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
             s = g[i]
@@ -257,6 +260,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for i in range(n):
                 dx[i] *= trust / step
             step = trust
+        predicted = 0.0  # first-order decrease of the Lagrangian along the step
+        for i in range(n):
+            predicted -= gl[i] * dx[i]
+        if predicted < 1e-15 * (1.0 + abs(G)):  # below what G can resolve: the optimum to rounding
+            status = CONVERGED
+            break
         alpha, accepted_step, Gt = 1.0, False, G
         for _ in range(LINE_SEARCH):  # backtrack along the Newton direction before damping it
             for i in range(n):
@@ -281,6 +290,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 lam[a] = -sv[nf + a]
             accepted += 1
             fresh = False
+            last_step = alpha * step
             if alpha == 1.0:
                 mu = max(mu * 0.1, MU_MIN)
                 trust = min(2.0 * trust, TRUST_MAX)

@@ -27,7 +27,7 @@ import numpy as np
 from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
 from .base import minimize
 from .ik import IKSolver, Outcome, Request, positive_int
-from .metaheuristic import within
+from .metaheuristic import compiled_or_loop, within
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
 
@@ -99,10 +99,14 @@ class Hybrid(IKSolver):
 
         def global_phase(initial: np.ndarray | None, generations: int) -> np.ndarray:
             nonlocal iterations, evaluations
-            run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=o.global_solver,
-                           rng=request.rng(), max_iterations=generations, population=request.population,
-                           initial=initial, bounds=problem.repair_mode, options=o.global_options,
-                           callback=counter.global_callback)
+            if request.callback is None and request.deadline is None:  # nothing to call between generations
+                run = compiled_or_loop(o.global_solver, problem, request._replace(initial=initial), generations,
+                                       dict(o.global_options or {}))
+            else:
+                run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=o.global_solver,
+                               rng=request.rng(), max_iterations=generations, population=request.population,
+                               initial=initial, bounds=problem.repair_mode, options=o.global_options,
+                               callback=counter.global_callback)
             iterations, evaluations = iterations + run.iterations, evaluations + run.evaluations
             history.extend(run.history.tolist())
             return run.x

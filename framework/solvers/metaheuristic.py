@@ -45,10 +45,8 @@ class Metaheuristic(IKSolver):
                 return stop or (request.stop_at_tolerance and within(problem, best_x, request))
 
         iterations = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
-        cls = get_solver(self.algorithm)
-        if callback is None and not request.progress and hasattr(cls, "run_compiled") \
-                and not problem.program.layout.generic:
-            run = _compiled(cls, problem, request, iterations, self.options)
+        if callback is None and not request.progress:
+            run = compiled_or_loop(self.algorithm, problem, request, iterations, self.options)
         else:
             run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=self.algorithm,
                            rng=request.rng(), max_iterations=iterations, population=request.population,
@@ -73,9 +71,15 @@ def within(problem, x: np.ndarray, request: Request) -> bool:
     return bool(np.all(np.where(angular, errors <= request.angle_tolerance, errors <= request.tolerance)))
 
 
-def _compiled(cls, problem, request: Request, iterations: int, options: dict) -> OptimizeResult:
-    """The algorithm's whole loop compiled on the problem's packed terms (an algorithm that has one, with no
-    callback to call between generations): the same generations as :func:`~framework.solvers.base.minimize`."""
+def compiled_or_loop(name: str, problem, request: Request, iterations: int, options: dict) -> OptimizeResult:
+    """``iterations`` generations of the metaheuristic ``name`` on the problem, with nothing to call between
+    them: its compiled loop on the problem's packed terms if it has one (the same generations as
+    :func:`~framework.solvers.base.minimize`), else the shared loop."""
+    cls = get_solver(name)
+    if not hasattr(cls, "run_compiled") or problem.program.layout.generic:
+        return minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
+                        max_iterations=iterations, population=request.population, initial=request.initial,
+                        bounds=problem.repair_mode, options=options)
     start = time.perf_counter()
     box = Box(problem.robot.lower, problem.robot.upper)
     algorithm = cls(box.n, box, request.population, request.rng(), options, request.initial,
