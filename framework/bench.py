@@ -297,16 +297,17 @@ def plan(
 
     ``cases`` keeps only cases (or systems) with these names.
     """
-    from .solvers import available_solvers
+    from .solve import DEFAULT_SOLVER
+    from .solvers import solver_names
 
     tasks = tuple(expand_task(p) for p in paths)
     if not tasks:
         raise TaskError("a benchmark needs at least one task file")
-    known = {"hybrid", *available_solvers()}
+    known = set(solver_names())
     specs: list[RunSpec] = []
     for task in tasks:
         b, s = task.bench, task.solver
-        names = list(solvers or b.get("solvers") or [s.get("name", "hybrid")])
+        names = list(solvers or b.get("solvers") or [s.get("name", DEFAULT_SOLVER)])
         bad = [n for n in names if n not in known]
         if bad:
             raise TaskError(f"{task.path}: unknown solver(s) {bad}; available: {sorted(known)}")

@@ -22,6 +22,7 @@ from .bench import add_bench_command, bench_command
 from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
 from .fabrik.taskfile import ReachTask
 from .recording import Recorder, add_replay_command, replay_command
+from .solve import DEFAULT_SOLVER
 from .taskfile import resolve_task
 
 
@@ -148,7 +149,7 @@ def _run(args, console: Console) -> int:
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}
     settings.update({k: v for k, v in overrides.items() if v is not None})
-    solver = settings.get("name", "hybrid")
+    solver = settings.get("name", DEFAULT_SOLVER)
     if task.is_tracking:
         return _run_tracking(args, console, task, settings, solver)
     cases = [c for c in task.cases if not args.case or c.name in args.case]

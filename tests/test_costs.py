@@ -270,3 +270,26 @@ def test_problem_previous_is_where_the_motion_terms_measure_from(robot, rng):
         expected[robot.group(group)] = q_prev[robot.group(group)]
     np.testing.assert_array_equal(problem.previous, expected)
     assert Problem(robot, Position("arm1_ee", [0.5, 0, 0.4])).previous is None
+
+
+def test_jacobians_on_a_real_robot_with_continuous_joints(erd, rng):
+    """PR2 from example-robot-data (torso + both arms, continuous forearm and wrist rolls): every block's Jacobian
+    against central differences of its residual, and a pose's position residual against Pinocchio."""
+    joints = ["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in (
+        "shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex", "wrist_roll")]
+    pr2 = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    hands = ("l_gripper_tool_frame", "r_gripper_tool_frame")
+    target = pr2.frame_placement(pr2.random_configurations(rng, 1)[0], hands[0])
+    terms = [fw.Pose(hands[0], target), RelativePosition(hands[0], hands[1], [0.0, -0.3, 0.0]),
+             Motion("all", pr2.middle)]
+    h = 1e-7
+    for x in pr2.random_configurations(rng, 3):
+        for term in terms:
+            program = Program(pr2, 1.0 * term)
+            r, J = residuals(program, x, -1)
+            fd = np.column_stack([(residuals(program, x + e, -1)[0] - residuals(program, x - e, -1)[0]) / (2 * h)
+                                  for e in np.eye(pr2.n) * h])
+            np.testing.assert_allclose(J, fd, atol=2e-6, err_msg=term.name)
+        r, _ = residuals(Program(pr2, 1.0 * terms[0]), x)
+        np.testing.assert_allclose(r[:3], pr2.frame_placement(x, hands[0]).translation - target.translation,
+                                   atol=1e-13)

@@ -157,8 +157,23 @@ def population_values(X, kin, prog, V) -> int:
 
     Returns the first row of ``X`` holding NaN or inf (left unevaluated), or -1.
     """
+    return _population(X, kin, prog, V, V[:, 0], False)
+
+
+@numba.njit(cache=True)
+def population_cost(X, kin, prog, F) -> int:
+    """The weighted sum of every compiled block's value for each row of ``X`` into ``F (pop,)``.
+
+    Returns the first row of ``X`` holding NaN or inf (left unevaluated), or -1.
+    """
+    return _population(X, kin, prog, np.empty((0, 0)), F, True)
+
+
+@numba.njit(cache=True, inline="always")
+def _population(X, kin, prog, V, F, weighted) -> int:
+    """One FK and every block per member of ``X``: term values into ``V`` or weighted sums into ``F``."""
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    X, V = borrow(X), borrow(V)
+    X = borrow(X)
     jint, jgeo, fslot, fgeo = kin
     bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
     n = X.shape[1]
@@ -173,9 +188,16 @@ def population_values(X, kin, prog, V) -> int:
         if bad >= 0:
             break
         _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+        f = 0.0
         for b in range(bint.shape[0]):
             rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
-            V[m, bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+            value = rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+            if weighted:
+                f += bflt[b, WEIGHT] * value
+            else:
+                V[m, bint[b, TERM]] += value
+        if weighted:
+            F[m] = f
     keep_alive(own)
     return bad
 
@@ -203,34 +225,3 @@ def task_errors_at(x, kin, prog, errors):
     linearize(borrow(x), 1, kin, prog, ws, False, 1)
     task_errors(prog, ws[3], errors)
     keep_alive(own)
-
-
-@numba.njit(cache=True)
-def population_cost(X, kin, prog, F) -> int:
-    """The weighted sum of every compiled block's value for each row of ``X`` into ``F (pop,)``.
-
-    Returns the first row of ``X`` holding NaN or inf (left unevaluated), or -1.
-    """
-    kin, prog = borrow_kin(kin), borrow_prog(prog)
-    X, F = borrow(X), borrow(F)
-    jint, jgeo, fslot, fgeo = kin
-    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
-    n = X.shape[1]
-    own = workspace(kin, prog, n)
-    out, W, Jf, r, Jr, L3, E9 = borrow_ws(own)
-    bad = -1
-    for m in range(X.shape[0]):
-        x = X[m]
-        for i in range(n):
-            if not np.isfinite(x[i]):
-                bad = m
-        if bad >= 0:
-            break
-        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
-        f = 0.0
-        for b in range(bint.shape[0]):
-            rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
-            f += bflt[b, WEIGHT] * rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
-        F[m] = f
-    keep_alive(own)
-    return bad
