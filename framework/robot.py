@@ -69,10 +69,15 @@ def joint_kind_and_axis(joint: pin.JointModel) -> tuple[JointKind, np.ndarray]:
     kind = _KIND_BY_PINOCCHIO[short]
     if kind is JointKind.PLANAR:
         return kind, np.array([0.0, 0.0, 1.0])
-    if short.endswith("Unaligned"):
-        concrete = joint.extract() if hasattr(joint, "extract") else joint
-        axis = np.asarray(concrete.axis, dtype=float).copy()
-        return kind, axis / np.linalg.norm(axis)
+    if short.endswith("Unaligned"):  # the axis is the joint's motion subspace (some bindings expose no `axis`)
+        data = joint.createData()
+        joint.calc(data, np.array([1.0, 0.0]) if kind is JointKind.CONTINUOUS else np.zeros(1))
+        S = np.asarray(data.S, dtype=float).ravel()
+        axis = S[:3] if kind is JointKind.PRISMATIC else S[3:]
+        norm = np.linalg.norm(axis)
+        if not norm > 0:
+            raise UnsupportedJointError(f"joint type {short} has a zero axis")
+        return kind, axis / norm
     return kind, np.array(_AXES[short[-1]])
 
 

@@ -198,3 +198,30 @@ def test_mount_errors():
         fw.mount(fw.planar_base_urdf(), [fw.Mount("youbot_arm", parent="deck")])
     with pytest.raises(fw.RobotFileError, match="prefix"):
         fw.mount(fw.planar_base_urdf(), [fw.Mount("youbot_arm", "platform"), fw.Mount("youbot_arm", "platform")])
+
+
+UNALIGNED_URDF = """<robot name="unaligned">
+  <link name="base"/><link name="l1"/><link name="l2"/><link name="ee"/>
+  <joint name="roll" type="continuous"><parent link="base"/><child link="l1"/><origin xyz="0 0 0.1"/>
+    <axis xyz="0 -1 0"/></joint>
+  <joint name="slide" type="prismatic"><parent link="l1"/><child link="l2"/><origin xyz="0.2 0 0"/>
+    <axis xyz="0.6 0 0.8"/><limit lower="-0.1" upper="0.3" effort="1" velocity="1"/></joint>
+  <joint name="tilt" type="revolute"><parent link="l2"/><child link="ee"/><origin xyz="0.3 0 0"/>
+    <axis xyz="0 0.6 0.8"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_unaligned_and_negative_axes_load_and_match_pinocchio(tmp_path, rng):
+    """A continuous joint about -y, a prismatic and a revolute joint along oblique axes: the axes are read from
+    Pinocchio's motion subspace; FK equals Pinocchio's and a reachable target is reached."""
+    path = tmp_path / "unaligned.urdf"
+    path.write_text(UNALIGNED_URDF)
+    robot = fw.load_robot(path)
+    assert [j.kind for j in robot.joints] == [fw.JointKind.CONTINUOUS, fw.JointKind.PRISMATIC, fw.JointKind.REVOLUTE]
+    np.testing.assert_allclose(robot.joints[0].axis, [0, -1, 0])
+    for x in robot.random_configurations(rng, 20):
+        np.testing.assert_allclose(robot.frame_poses(x, "ee").positions[0, 0],
+                                   robot.frame_placement(x, "ee").translation, atol=1e-13)
+    goal = robot.random_configurations(rng, 1)[0]
+    result = fw.solve(fw.Problem(robot, fw.Position("ee", robot.frame_placement(goal, "ee").translation)))
+    assert result.success
