@@ -114,23 +114,19 @@ def term_values(x, prog, ws, values):
 
 
 @numba.njit(cache=True)
-def within_tolerance(prog, r, tol_linear, tol_angular) -> bool:
-    """Whether every task block's error ``‖r_b‖`` is within its tolerance (m or rad), from stacked task rows."""
+def within_tolerance(prog, errors, tol_linear, tol_angular) -> bool:
+    """Whether every task block's error (from :func:`task_errors`) is within its tolerance (m or rad)."""
     bint = prog[0]
-    row = 0
+    k = 0
     for b in range(bint.shape[0]):
         if bint[b, LEVEL] != 1:
             continue
-        rows = bint[b, ROWS]
-        s = 0.0
-        for c in range(rows):
-            s += r[row + c] * r[row + c]
         tol = bint[b, TOL]
-        if tol == TOL_LINEAR and not np.sqrt(s) <= tol_linear:
+        if tol == TOL_LINEAR and not errors[k] <= tol_linear:
             return False
-        if tol == TOL_ANGULAR and not np.sqrt(s) <= tol_angular:
+        if tol == TOL_ANGULAR and not errors[k] <= tol_angular:
             return False
-        row += rows
+        k += 1
     return True
 
 

@@ -84,11 +84,8 @@ def lu_solve(A, b, M, out) -> bool:
 
 
 @numba.njit(cache=True)
-def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
-    """``dx = −Jᵀ (J Jᵀ + damping I)⁻¹ r``: the (damped) least-norm Gauss-Newton step, ``Jr (m, n)``.
-
-    ``A, L (m, m)`` and ``y (m,)`` are scratch. With ``damping = 0`` and full row rank, ``J dx = −r`` exactly.
-    """
+def gram(Jr, damping, A):
+    """``A = J Jᵀ + damping I`` for ``Jr (m, n)`` into ``A (m, m)``."""
     m, n = Jr.shape
     for i in range(m):
         for j in range(i + 1):
@@ -98,6 +95,16 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
             A[i, j] = s
             A[j, i] = s
         A[i, i] += damping
+
+
+@numba.njit(cache=True)
+def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
+    """``dx = −Jᵀ (J Jᵀ + damping I)⁻¹ r``: the (damped) least-norm Gauss-Newton step, ``Jr (m, n)``.
+
+    ``A, L (m, m)`` and ``y (m,)`` are scratch. With ``damping = 0`` and full row rank, ``J dx = −r`` exactly.
+    """
+    m, n = Jr.shape
+    gram(Jr, damping, A)
     if not cholesky_solve(A, r, L, y):
         return False
     for c in range(n):

@@ -21,7 +21,7 @@ from ..costs.blocks import LEVEL, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho
 from ..costs.kernels import level_value, linearize, task_errors, term_values, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
-from .linalg import cholesky_solve, least_norm_step, lu_solve
+from .linalg import cholesky_solve, gram, lu_solve
 from .reach import bounded_step, project
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
@@ -325,13 +325,8 @@ def _multipliers(A, g, Am, Lm, y, lam):
         for i in range(n):
             s += A[a, i] * g[i]
         y[a] = s
-        for c in range(a + 1):
-            t = 0.0
-            for i in range(n):
-                t += A[a, i] * A[c, i]
-            Am[a, c] = t
-            Am[c, a] = t
-    rhs = y.copy()
+    gram(A, 0.0, Am)
+    rhs = y[:m].copy()
     if not cholesky_solve(Am, rhs, Lm, lam):
         lam[:] = 0.0
 

@@ -121,7 +121,8 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
     iterations, evaluations, restarts, next_start = 0, 1, 0, 0
     status = ITERATIONS
     while True:
-        if within_tolerance(prog, ws[3], tol_linear, tol_angular):
+        task_errors(prog, ws[3], errors)
+        if within_tolerance(prog, errors, tol_linear, tol_angular):
             status = REACHED
             break
         if iterations >= max_iterations:
