@@ -293,3 +293,16 @@ def test_jacobians_on_a_real_robot_with_continuous_joints(erd, rng):
         r, _ = residuals(Program(pr2, 1.0 * terms[0]), x)
         np.testing.assert_allclose(r[:3], pr2.frame_placement(x, hands[0]).translation - target.translation,
                                    atol=1e-13)
+
+
+def test_quaternion_order_is_named():
+    """quat_xyzw= and quat_wxyz= give the same rotation as scipy; a bare 4-vector is (x, y, z, w)."""
+    rot = Rotation.from_euler("zyx", [0.3, -0.7, 1.1])
+    x, y, z, w = rot.as_quat()
+    for term in (Orientation("arm1_ee", quat_xyzw=[x, y, z, w]), Orientation("arm1_ee", quat_wxyz=[w, x, y, z]),
+                 Orientation("arm1_ee", [x, y, z, w]), Orientation("arm1_ee", rot.as_matrix())):
+        np.testing.assert_allclose(term.target, rot.as_matrix(), atol=1e-12)
+    with pytest.raises(fw.TaskError, match="exactly one"):
+        Orientation("arm1_ee", rot.as_matrix(), quat_wxyz=[w, x, y, z])
+    with pytest.raises(fw.TaskError, match="quat_wxyz must be 4"):
+        Orientation("arm1_ee", quat_wxyz=[w, x, y])

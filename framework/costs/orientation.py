@@ -68,20 +68,46 @@ def _rotation_defect(R) -> int:
 
 
 class Orientation(Term):
-    """``sin(φ/2)`` (unitless) for the angle φ between the frame's rotation and the target's."""
+    """``sin(φ/2)`` (unitless) for the angle φ between the frame's rotation and the target's.
+
+    The target is a ``(3, 3)`` rotation matrix (or a ``pinocchio.SE3``'s rotation), or a quaternion given with its
+    order named: ``quat_xyzw=`` (scipy's order) or ``quat_wxyz=`` (Eigen's constructor order, ROS messages spell
+    out x, y, z, w). A bare 4-vector as ``target`` is read as ``(x, y, z, w)``.
+    """
 
     level = "task"
 
-    def __init__(self, frame: str, target: Sequence[float] | np.ndarray, *, name: str | None = None):
+    def __init__(self, frame: str, target: Sequence[float] | np.ndarray | None = None, *,
+                 quat_xyzw: Sequence[float] | None = None, quat_wxyz: Sequence[float] | None = None,
+                 name: str | None = None):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"orientation[{frame}]"
-        self.set_target(target)
+        self.set_target(target, quat_xyzw=quat_xyzw, quat_wxyz=quat_wxyz)
 
-    def set_target(self, target: Sequence[float] | np.ndarray) -> None:
-        """Change the target rotation (``(3, 3)`` matrix or ``(x, y, z, w)`` quaternion, world frame)."""
-        self.target = rotation_from(target, f"orientation target of {self.frame!r}")
+    def set_target(self, target: Sequence[float] | np.ndarray | None = None, *,
+                   quat_xyzw: Sequence[float] | None = None, quat_wxyz: Sequence[float] | None = None) -> None:
+        """Change the target rotation (world frame): a matrix, or a quaternion with its order named."""
+        self.target = rotation_target(target, quat_xyzw, quat_wxyz, f"orientation target of {self.frame!r}")
         self._touch()
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         return (Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, self.target.ravel(), tolerance=B.TOL_ANGULAR),)
+
+
+def rotation_target(target, quat_xyzw, quat_wxyz, what: str) -> np.ndarray:
+    """The rotation matrix of exactly one of ``target`` (matrix, or ``(x, y, z, w)``), ``quat_xyzw``, ``quat_wxyz``."""
+    given = [v is not None for v in (target, quat_xyzw, quat_wxyz)]
+    if sum(given) != 1:
+        raise TaskError(f"{what}: give exactly one of a rotation matrix, quat_xyzw= or quat_wxyz=")
+    if quat_wxyz is not None:
+        q = np.asarray(quat_wxyz, dtype=float)
+        if q.shape != (4,):
+            raise TaskError(f"{what}: quat_wxyz must be 4 numbers (w, x, y, z); got shape {q.shape}")
+        return rotation_from(np.r_[q[1:], q[0]], what)
+    if quat_xyzw is not None:
+        q = np.asarray(quat_xyzw, dtype=float)
+        if q.shape != (4,):
+            raise TaskError(f"{what}: quat_xyzw must be 4 numbers (x, y, z, w); got shape {q.shape}")
+        return rotation_from(q, what)
+    return rotation_from(target, what)
