@@ -70,7 +70,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     (after a call with ``kinematics=1, want_jacobian=False`` at the same ``x``: a step that was accepted).
     """
     jint, jgeo, fslot, fgeo = kin
-    bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
+    bint, params, idx, wrap = prog[0], prog[2], prog[3], prog[4]
     out, W, Jf, r, Jr, L3, E9 = ws
     if kinematics == 1:
         _fk_one(x, jint, jgeo, fslot, fgeo, out, W)

@@ -9,12 +9,11 @@ Terms without blocks (user terms written in numpy) are evaluated by their own ``
 from __future__ import annotations
 
 from collections.abc import Sequence
-from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from ..errors import TaskError
+from ..errors import ConfigurationError, TaskError
 from ..robot import JointKind, Robot
 from . import blocks as B
 from .kernels import population_cost, population_values
@@ -117,14 +116,12 @@ class _Layout:
         self.block_term = np.array(self.block_term, dtype=np.int64)
         self.scales = np.array(scales, dtype=float)
         self.idx = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int64)
-        self.params_size = pptr
         self.wrap = wrapping_coordinates(robot)
         task = self.bint[:, B.LEVEL] == B.LEVEL_TASK
         self.task_tolerances = self.bint[task, B.TOL]
         self.task_block_rows = self.bint[task, B.ROWS]
         self.levels_present = frozenset(self.bint[:, B.LEVEL].tolist())
         self.term_kinds = tuple(_kind(level, blocks) for level, blocks in zip(levels, packed))
-        self.compiled = np.array([p is not None for p in packed])
         self.generic = [k for k, p in enumerate(packed) if p is None]
         names = []
         for term, level, blocks in zip(terms, levels, packed):
@@ -158,7 +155,6 @@ class Program:
     Attributes:
         kin: ``(jint, jgeo, fslot, fgeo)``, the population-FK tables of every frame the blocks read.
         prog: ``(bint, bflt, params, idx, wrap, chain_ptr, chain_idx)``, the blocks.
-        compiled: ``(terms,)`` True for terms evaluated by the kernel.
         task_blocks: a name for each task block's error, in block order (``"position[ee]"``, ...).
     """
 
@@ -180,7 +176,7 @@ class Program:
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
         self.task_angular, self.task_angular_list = layout.task_angular, layout.task_angular_list
         self.task_rows, self.task_blocks = layout.task_rows, layout.task_blocks
-        self.term_kinds, self.compiled = layout.term_kinds, layout.compiled
+        self.term_kinds = layout.term_kinds
         self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
         self._versions = [t.version for t in self.terms]
 
@@ -191,18 +187,6 @@ class Program:
         for p, i in self.layout.references:
             x[idx[i]] = params[p]
         return bool(self.layout.references)
-
-    @property
-    def levels(self) -> np.ndarray:
-        """``(terms,)`` level of each term (0 value only, 1 task, 2 regularizer)."""
-        return np.array([_LEVELS[t.level] for t in self.terms])
-
-    def has_level(self, level: int) -> bool:
-        """Whether any compiled block is at ``level``."""
-        return level in self.layout.levels_present
-
-    def _versions_changed(self) -> bool:
-        return any(t.version != v for t, v in zip(self.terms, self._versions))
 
     def refresh(self) -> None:
         """Re-pack the parameters of terms whose targets changed since the last call (a few µs)."""
@@ -218,26 +202,16 @@ class Program:
         """``(pop,)`` weighted sums of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
         if self.layout.generic:
             return self.values(X) @ self.weights
-        if self._versions_changed():
-            self.refresh()
+        self.refresh()
         F = np.empty(X.shape[0])
-        bad = population_cost(X, self.kin, self.prog, F)
-        if bad >= 0:
-            from ..errors import ConfigurationError
-
-            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        _check_finite(X, population_cost(X, self.kin, self.prog, F))
         return F
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, terms)`` unweighted values of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
-        if self._versions_changed():
-            self.refresh()
+        self.refresh()
         V = np.zeros((X.shape[0], len(self.terms)))
-        bad = population_values(X, self.kin, self.prog, V)
-        if bad >= 0:
-            from ..errors import ConfigurationError
-
-            raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
+        _check_finite(X, population_values(X, self.kin, self.prog, V))
         generic = self.layout.generic
         if generic:
             frames = tuple(dict.fromkeys(f for k in generic for f in self.terms[k].frames))
@@ -245,6 +219,12 @@ class Program:
             for k in generic:
                 V[:, k] = self.terms[k].value(self.robot, X, poses)
         return V
+
+
+def _check_finite(X: np.ndarray, bad: int) -> None:
+    """Raise for row ``bad`` of ``X`` if a kernel found NaN or inf there (``bad < 0``: none)."""
+    if bad >= 0:
+        raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
 
 
 def coordinates_block(indices: Sequence[int], previous: np.ndarray, rho: int, scale: float = 1.0) -> Block:

@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..costs.blocks import HALFSIN, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, RHO, ROWS, SCALE, WEIGHT
+from ..costs.blocks import LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS
 from ..costs.kernels import residuals_at, task_errors_at
 from ..costs.program import Program
 from ..errors import SolverError
@@ -110,6 +110,11 @@ def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return program.robot.lower, program.robot.upper, program.layout.box_wrap
 
 
+def _nanoseconds(deadline: float | None) -> int:
+    """A ``time.monotonic()`` deadline [s] as the compiled loops' ``deadline_ns`` (``0``: none)."""
+    return 0 if deadline is None else int(deadline * 1e9)
+
+
 def solve_local(
     program: Program,
     x0: np.ndarray,
@@ -129,11 +134,11 @@ def solve_local(
         deadline: ``time.monotonic()`` at which to stop (overrides ``settings.time_budget``).
     """
     program.refresh()
-    lower, upper, box_wrap = program.robot.lower, program.robot.upper, program.layout.box_wrap
+    lower, upper, box_wrap = search_box(program)
     x = np.array(x0, dtype=float)
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
-    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    deadline_ns = _nanoseconds(deadline)
     stats = np.empty(3, dtype=np.int64)
     errors = np.empty(program.task_block_rows.size)
     values = np.zeros(len(program.terms))
@@ -226,22 +231,18 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray 
     program.refresh()
     lower, upper, box_wrap = search_box(program)
     bint = program.prog[0].copy()
-    bflt = program.prog[1]
+    prog = (bint, *program.prog[1:])  # the held task blocks at level 1, the released ones at level 2
     x = np.array(x0, dtype=float)
     stats = np.zeros(3, dtype=np.int64)
-    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    deadline_ns = _nanoseconds(deadline)
     evaluations = 0
     task = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
     held = np.ones(task.size, dtype=bool) if multipliers is not None else task_errors(program, x) <= near
-    lam = None if multipliers is None else np.asarray(multipliers, dtype=float)
+    lam = None if multipliers is None else np.ascontiguousarray(multipliers, dtype=float)
     for _ in range(2 * task.size + 2):
         if lam is not None:  # release the held blocks that are no exact penalty for their multipliers
-            rows = bint[task[held], ROWS]
-            norms = np.array([np.linalg.norm(p) for p in np.split(lam, np.cumsum(rows)[:-1])]) if rows.size \
-                else np.zeros(0)
-            blocks = task[held]
-            slopes = np.where(bint[blocks, RHO] == HALFSIN, 0.5, 1.0)
-            pays = norms < bflt[blocks, WEIGHT] * bflt[blocks, SCALE] * slopes
+            pays = np.empty(int(held.sum()), dtype=bool)
+            newton.exact_penalties(prog, lam, pays)
             new = held.copy()
             new[np.flatnonzero(held)[~pays]] = False
             new |= task_errors(program, x) <= near  # released blocks sitting on their target: hold them exactly
@@ -250,7 +251,6 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray 
             held = new
         bint[task] = program.prog[0][task]
         bint[task[~held], LEVEL] = LEVEL_REGULARIZER
-        prog = (bint, *program.prog[1:])
         lam = np.zeros(int(bint[task[held], ROWS].sum()))
         errors = np.zeros(int(held.sum()))
         newton.regularize(x, lower, upper, box_wrap, program.kin, prog, settings.smoothing,
@@ -269,7 +269,7 @@ def minimize_sum(program: Program, x0: np.ndarray, settings: LocalSettings = Loc
     lower, upper, box_wrap = search_box(program)
     x = np.array(x0, dtype=float)
     stats = np.zeros(3, dtype=np.int64)
-    deadline_ns = 0 if deadline is None else int(deadline * 1e9)
+    deadline_ns = _nanoseconds(deadline)
     code = newton.weighted_newton(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
                                   settings.regularize_iterations, deadline_ns, stats)
     return x, _REGULARIZE_STATUS[int(code)], int(stats[1])

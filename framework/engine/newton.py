@@ -17,12 +17,13 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import LEVEL, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives
+from ..costs.blocks import (HALFSIN, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives,
+                            rho_value)
 from ..costs.kernels import level_value, linearize, task_errors, term_values, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve
-from .reach import bounded_step, project
+from .reach import bounded_step, held, project, squared_norm
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
 MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
@@ -64,10 +65,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
             continue
         rows, w = bint[b, ROWS], bflt[b, WEIGHT]
         rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr, majorize_below)
-        s = 0.0
-        for a in range(rows):
-            s += r[row + a] * r[row + a]
-        value += w * _rho_from(bint[b, RHO], bflt[b, SCALE], s, r, row, rows)
+        value += w * rho_value(bint[b, RHO], bflt[b, SCALE], r, row, rows)
         for i in range(n):
             acc = 0.0
             for a in range(rows):
@@ -93,28 +91,11 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
 
 
 @numba.njit(cache=True)
-def _rho_from(rho, scale, s, r, row, rows) -> float:
-    if rho == 2:  # L1
-        t = 0.0
-        for a in range(rows):
-            t += abs(r[row + a])
-        return scale * t
-    if rho == 3:  # SQUARED
-        return scale * s
-    if rho == 1:  # HALFSIN
-        return scale * np.sin(0.5 * min(np.sqrt(s), np.pi))
-    return scale * np.sqrt(s)
-
-
-@numba.njit(cache=True)
 def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target) -> float:
     """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
     the step would push through are left out of it); returns the final ``‖r‖``."""
     n = x.shape[0]
-    e = 0.0
-    for i in range(m):
-        e += ws[3][i] * ws[3][i]
-    e = np.sqrt(e)
+    e = np.sqrt(squared_norm(ws[3], m))
     for _ in range(steps):
         if e <= target:
             break
@@ -124,10 +105,7 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps
             x[i] += dx[i]
         project(x, lower, upper, box_wrap)
         linearize(x, 1, kin, prog, ws, True, 1)
-        e_new = 0.0
-        for i in range(m):
-            e_new += ws[3][i] * ws[3][i]
-        e_new = np.sqrt(e_new)
+        e_new = np.sqrt(squared_norm(ws[3], m))
         if not e_new < e:
             e = e_new
             break
@@ -181,10 +159,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     linearize(x, 1, kin, prog, cur, True, 1)
     linearize(x, 2, kin, prog, cur_r, True, 0)
     evaluations = 1
-    feasible = 0.0
-    for i in range(m):
-        feasible += cur[3][i] * cur[3][i]
-    feasible = max(np.sqrt(feasible), 1e-13)
+    feasible = max(np.sqrt(squared_norm(cur[3], m)), 1e-13)
     G = level_value(2, prog, cur_r[3], True)
     objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
     _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
@@ -207,9 +182,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 s -= cur[4][a, i] * lam[a]
             gl[i] = s
         nf = 0
-        for i in range(n):
-            held = (x[i] <= lower[i] and gl[i] > 0.0) or (x[i] >= upper[i] and gl[i] < 0.0)
-            if box_wrap[i] or not held:
+        for i in range(n):  # the coordinates descent along −gl does not push through a bound
+            if not held(x, lower, upper, box_wrap, i, -gl[i]):
                 fidx[nf] = i
                 nf += 1
         if nf <= m:
@@ -365,9 +339,8 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
             F = objective_derivatives(-1, prog, cur, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
             fresh = True
         nf = 0
-        for i in range(n):
-            held = (x[i] <= lower[i] and g[i] > 0.0) or (x[i] >= upper[i] and g[i] < 0.0)
-            if box_wrap[i] or not held:
+        for i in range(n):  # the coordinates descent along −g does not push through a bound
+            if not held(x, lower, upper, box_wrap, i, -g[i]):
                 fidx[nf] = i
                 nf += 1
         if nf == 0:
@@ -419,35 +392,38 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
 
 
 @numba.njit(cache=True)
-def exact_penalty(x, lower, upper, box_wrap, prog, multipliers) -> bool:
-    """Whether the task's multipliers make every weighted task block an exact penalty at ``x``.
+def exact_penalties(prog, multipliers, pays) -> bool:
+    """Whether each task block (level 1, in block order) is an exact penalty for its rows of ``multipliers``,
+    into ``pays (blocks,)``; returns whether every one is.
 
     A block weighted ``w`` with ``ρ = s‖r‖`` is one when ``‖λ_b‖ < w s`` (``w s / 2`` for ``ρ = s sin(‖r‖/2)``):
-    then no move off the task lowers the weighted sum. ``False`` on the box boundary (bound multipliers are not
-    computed) and for other ρ.
+    then no move off the block lowers the weighted sum. Blocks with other ρ never are.
     """
-    for i in range(x.shape[0]):
-        if not box_wrap[i] and (x[i] <= lower[i] or x[i] >= upper[i]):
-            return False
     bint, bflt = prog[0], prog[1]
-    row = 0
+    row = k = 0
+    every = True
     for b in range(bint.shape[0]):
         if bint[b, LEVEL] != 1:
             continue
         rows, rho = bint[b, ROWS], bint[b, RHO]
-        if rho == 0:
-            slope = 1.0
-        elif rho == 1:
-            slope = 0.5
-        else:
-            return False
-        s = 0.0
-        for a in range(rows):
-            s += multipliers[row + a] * multipliers[row + a]
-        if not np.sqrt(s) < bflt[b, WEIGHT] * bflt[b, SCALE] * slope:
-            return False
+        slope = 1.0 if rho == NORM else (0.5 if rho == HALFSIN else 0.0)
+        norm = np.sqrt(squared_norm(multipliers[row:], rows))
+        pays[k] = slope > 0.0 and norm < bflt[b, WEIGHT] * bflt[b, SCALE] * slope
+        every = every and pays[k]
         row += rows
-    return True
+        k += 1
+    return every
+
+
+@numba.njit(cache=True)
+def exact_penalty(x, lower, upper, box_wrap, prog, multipliers) -> bool:
+    """Whether the task's multipliers make every task block an exact penalty at ``x`` (see
+    :func:`exact_penalties`): then ``x`` also minimizes the weighted sum locally. ``False`` on the box
+    boundary (bound multipliers are not computed)."""
+    for i in range(x.shape[0]):
+        if not box_wrap[i] and (x[i] <= lower[i] or x[i] >= upper[i]):
+            return False
+    return exact_penalties(prog, multipliers, np.empty(prog[0].shape[0], dtype=np.bool_))
 
 
 @numba.njit(cache=True)

@@ -51,6 +51,12 @@ def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
 
 
 @numba.njit(cache=True)
+def held(x, lower, upper, box_wrap, i, d) -> bool:
+    """Whether coordinate ``i`` sits on a bound that a move in direction ``d`` (its sign) pushes through."""
+    return not box_wrap[i] and ((x[i] <= lower[i] and d < 0.0) or (x[i] >= upper[i] and d > 0.0))
+
+
+@numba.njit(cache=True)
 def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> bool:
     """:func:`damped_step`, then again without the coordinates it would push through a bound they sit on."""
     if not damped_step(Jr, r, damping, A, L, y, dx):
@@ -58,15 +64,15 @@ def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> 
     m, n = Jr.shape
     blocked = False
     for i in range(n):
-        if not box_wrap[i] and ((x[i] <= lower[i] and dx[i] < 0.0) or (x[i] >= upper[i] and dx[i] > 0.0)):
+        if held(x, lower, upper, box_wrap, i, dx[i]):
             blocked = True
             break
     if not blocked:
         return True
     for i in range(n):
-        held = not box_wrap[i] and ((x[i] <= lower[i] and dx[i] < 0.0) or (x[i] >= upper[i] and dx[i] > 0.0))
+        keep = not held(x, lower, upper, box_wrap, i, dx[i])
         for a in range(m):
-            Jc[a, i] = 0.0 if held else Jr[a, i]
+            Jc[a, i] = Jr[a, i] if keep else 0.0
     return damped_step(Jc, r, damping, A, L, y, dx)
 
 
