@@ -166,9 +166,8 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     errors = outcome.task_errors
     if errors is None:
         errors = task_errors(program, x)
-    linear, angular = request.tolerance, request.angle_tolerance
     error_list = errors.tolist()
-    success = all(e <= (angular if a else linear) for e, a in zip(error_list, program.task_angular_list))
+    success = program.within(error_list, request.tolerance, request.angle_tolerance)
     value_list = values.tolist()
     return IKResult(
         configuration=x,

@@ -130,8 +130,7 @@ class _Layout:
                 names.append(term.name + (suffix if len(blocks) > 1 else ""))
         self.task_blocks = tuple(names)
         self._bflt: dict[tuple[float, ...], np.ndarray] = {}
-        self.task_angular = self.task_tolerances == B.TOL_ANGULAR
-        self.task_angular_list = tuple(self.task_angular.tolist())
+        self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
         self.no_starts = np.zeros((0, robot.n))
@@ -174,11 +173,16 @@ class Program:
         params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
         self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
-        self.task_angular, self.task_angular_list = layout.task_angular, layout.task_angular_list
+        self.task_angular = layout.task_angular
         self.task_rows, self.task_blocks = layout.task_rows, layout.task_blocks
         self.term_kinds = layout.term_kinds
         self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
         self._versions = [t.version for t in self.terms]
+
+    def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float) -> bool:
+        """Whether every task block's error (block order, from :func:`framework.engine.task_errors`) is within
+        ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others."""
+        return all(e <= (angle_tolerance if a else tolerance) for e, a in zip(errors, self.task_angular))
 
     def reference(self, x: np.ndarray) -> bool:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they

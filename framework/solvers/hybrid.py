@@ -25,9 +25,8 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
-from .base import minimize
 from .ik import IKSolver, Outcome, Request, positive_int
-from .metaheuristic import compiled_or_loop, within
+from .metaheuristic import compiled_or_loop, shared_loop, within
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
 
@@ -99,17 +98,18 @@ class Hybrid(IKSolver):
 
         def global_phase(initial: np.ndarray | None, generations: int) -> np.ndarray:
             nonlocal iterations, evaluations
+            asked = request._replace(initial=initial)
             if request.callback is None and request.deadline is None:  # nothing to call between generations
-                run = compiled_or_loop(o.global_solver, problem, request._replace(initial=initial), generations,
-                                       dict(o.global_options or {}))
+                run = compiled_or_loop(o.global_solver, problem, asked, generations, dict(o.global_options or {}))
             else:
-                run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=o.global_solver,
-                               rng=request.rng(), max_iterations=generations, population=request.population,
-                               initial=initial, bounds=problem.repair_mode, options=o.global_options,
-                               callback=counter.global_callback)
+                run = shared_loop(o.global_solver, problem, asked, generations, o.global_options,
+                                  callback=counter.global_callback)
             iterations, evaluations = iterations + run.iterations, evaluations + run.evaluations
             history.extend(run.history.tolist())
             return run.x
+
+        def better(a, b):  # the engine result that reaches the task, else the lower cost
+            return min((a, b), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
 
         escalated = False
         if o.global_iterations:
@@ -119,11 +119,11 @@ class Hybrid(IKSolver):
         else:  # a warm start's basin first (a slow descent near a singularity is not a reason to leave it) ...
             best = engine(x0, _in_basin(settings))
             if not best.reached and request.time_left() > 0:  # ... then random restarts
-                best = min((best, engine(x0)), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
+                best = better(best, engine(x0))
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = engine(global_phase(None, GLOBAL_ITERATIONS))
-            best = min((best, cold), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
+            best = better(best, cold)
         x, errors, values, weighted = best.x, best.task_errors, best.values, False
         if not problem.priorities and (not best.reached or not reaching_is_optimal(problem.program, x,
                                                                                   best.multipliers)):
@@ -141,12 +141,7 @@ class Hybrid(IKSolver):
                 points.append(z)
             x, errors, values = points[int(np.argmin(problem.cost(np.array(points))))], None, None
             counter.report(x)
-        if errors is None:
-            stop = "tolerance" if within(problem, x, request) else "max_iterations"
-        else:
-            stop = stop_reason(best.reached, request)
-        if stop == "max_iterations" and request.deadline is not None and request.time_left() <= 0:
-            stop = "time_budget"
+        stop = stop_reason(within(problem, x, request) if errors is None else best.reached, request)
         report = {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
                   "restart_count": restarts, "regularized": best.regularized, "weighted": weighted,
                   "population": request.population}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -48,10 +49,8 @@ class Metaheuristic(IKSolver):
         if callback is None and not request.progress:
             run = compiled_or_loop(self.algorithm, problem, request, iterations, self.options)
         else:
-            run = minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=self.algorithm,
-                           rng=request.rng(), max_iterations=iterations, population=request.population,
-                           initial=request.initial, bounds=problem.repair_mode, options=self.options,
-                           callback=callback, progress=request.progress)
+            run = shared_loop(self.algorithm, problem, request, iterations, self.options, callback=callback,
+                              progress=request.progress)
         stop = run.stop_reason
         if stop == "callback":
             if request.stop_at_tolerance and within(problem, run.x, request):
@@ -66,9 +65,18 @@ def within(problem, x: np.ndarray, request: Request) -> bool:
     """Whether every task term of ``problem`` is within the request's tolerances at ``x``."""
     from ..engine import task_errors
 
-    errors = task_errors(problem.program, x)
-    angular = problem.program.task_angular
-    return bool(np.all(np.where(angular, errors <= request.angle_tolerance, errors <= request.tolerance)))
+    return problem.program.within(task_errors(problem.program, x).tolist(), request.tolerance,
+                                  request.angle_tolerance)
+
+
+def shared_loop(name: str, problem, request: Request, iterations: int, options: Mapping[str, Any] | None, *,
+                callback: Callable | None = None, progress: bool = False) -> OptimizeResult:
+    """``iterations`` generations of the metaheuristic ``name`` on the problem's population cost, in the
+    shared ask/tell loop (:func:`~framework.solvers.base.minimize`), from the request's warm starts and
+    generator."""
+    return minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
+                    max_iterations=iterations, population=request.population, initial=request.initial,
+                    bounds=problem.repair_mode, options=options, callback=callback, progress=progress)
 
 
 def compiled_or_loop(name: str, problem, request: Request, iterations: int, options: dict) -> OptimizeResult:
@@ -77,9 +85,7 @@ def compiled_or_loop(name: str, problem, request: Request, iterations: int, opti
     :func:`~framework.solvers.base.minimize`), else the shared loop."""
     cls = get_solver(name)
     if not hasattr(cls, "run_compiled") or problem.program.layout.generic:
-        return minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
-                        max_iterations=iterations, population=request.population, initial=request.initial,
-                        bounds=problem.repair_mode, options=options)
+        return shared_loop(name, problem, request, iterations, options)
     start = time.perf_counter()
     box = Box(problem.robot.lower, problem.robot.upper)
     algorithm = cls(box.n, box, request.population, request.rng(), options, request.initial,
