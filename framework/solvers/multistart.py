@@ -52,13 +52,12 @@ def default_iterations(request: Request) -> int:
 
 
 def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
-    """The first start and where it came from: ``initial``, the regularizers' reference, or the box middle."""
+    """The first start and where it came from: ``initial``, the regularizers' reference
+    (:attr:`~framework.problem.Problem.previous`), or the box middle."""
     if request.initial is not None:
         return request.initial[0].copy(), "initial"
-    x = problem.robot.middle.copy()
-    if warm_start and problem.program.reference(x):
-        return np.clip(x, problem.robot.lower, problem.robot.upper), "previous"
-    return x, "middle"
+    previous = problem.previous if warm_start else None
+    return (previous, "previous") if previous is not None else (problem.robot.middle.copy(), "middle")
 
 
 def local_settings(request: Request, options, max_iterations: int) -> LocalSettings:
