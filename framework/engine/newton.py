@@ -183,7 +183,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             gl[i] = s
         nf = 0
         for i in range(n):  # the coordinates descent along −gl does not push through a bound
-            if not held(x, lower, upper, box_wrap, i, -gl[i]):
+            if not held(x[i], lower[i], upper[i], box_wrap[i], -gl[i]):
                 fidx[nf] = i
                 nf += 1
         if nf <= m:
@@ -340,7 +340,7 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
             fresh = True
         nf = 0
         for i in range(n):  # the coordinates descent along −g does not push through a bound
-            if not held(x, lower, upper, box_wrap, i, -g[i]):
+            if not held(x[i], lower[i], upper[i], box_wrap[i], -g[i]):
                 fidx[nf] = i
                 nf += 1
         if nf == 0:

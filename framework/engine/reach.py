@@ -51,9 +51,10 @@ def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
 
 
 @numba.njit(cache=True)
-def held(x, lower, upper, box_wrap, i, d) -> bool:
-    """Whether coordinate ``i`` sits on a bound that a move in direction ``d`` (its sign) pushes through."""
-    return not box_wrap[i] and ((x[i] <= lower[i] and d < 0.0) or (x[i] >= upper[i] and d > 0.0))
+def held(x, lower, upper, wraps, d) -> bool:
+    """Whether a coordinate at ``x`` in ``[lower, upper]`` (``wraps``: no bounds) sits on a bound that a move in
+    direction ``d`` (its sign) pushes through."""
+    return not wraps and ((x <= lower and d < 0.0) or (x >= upper and d > 0.0))
 
 
 @numba.njit(cache=True)
@@ -64,13 +65,13 @@ def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> 
     m, n = Jr.shape
     blocked = False
     for i in range(n):
-        if held(x, lower, upper, box_wrap, i, dx[i]):
+        if held(x[i], lower[i], upper[i], box_wrap[i], dx[i]):
             blocked = True
             break
     if not blocked:
         return True
     for i in range(n):
-        keep = not held(x, lower, upper, box_wrap, i, dx[i])
+        keep = not held(x[i], lower[i], upper[i], box_wrap[i], dx[i])
         for a in range(m):
             Jc[a, i] = Jr[a, i] if keep else 0.0
     return damped_step(Jc, r, damping, A, L, y, dx)
