@@ -18,7 +18,8 @@ def _require_jupyter() -> None:
 
 
 NOTEBOOKS = sorted((Path(__file__).parent.parent / "notebooks").glob("*.ipynb"))
-CELL_TIMEOUT = 120  # seconds per cell; the slowest cell (200 tracked waypoints) takes ~3 s
+CELL_TIMEOUT = 600  # seconds per cell: a guard against hangs. Warm, the slowest cell (200 tracked waypoints)
+# takes ~3 s; in a fresh install the first solve also compiles the engine (~35 s here, more on a loaded machine).
 
 
 def test_the_learning_path_is_complete():

@@ -14,6 +14,8 @@ from ..kinematics import _fk_one, frame_jacobians
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .blocks import (
     LEVEL,
+    LEVEL_REGULARIZER,
+    LEVEL_TASK,
     RHO,
     ROWS,
     SCALE,
@@ -25,6 +27,15 @@ from .blocks import (
     block_residual,
     rho_value,
 )
+
+# Arguments of compiled calls, as numpy scalars: numba compiles a callee once per *literal* Python int / bool it
+# is called with (a whole compile, seconds for the engine's kernels), but once for all values of an int64 / bool.
+#: ``level`` arguments: the task, the regularizers, both.
+TASK, REGULARIZERS, TASK_AND_REGULARIZERS = np.int64(LEVEL_TASK), np.int64(LEVEL_REGULARIZER), np.int64(-1)
+#: :func:`linearize`'s ``kinematics``: reuse the poses and Jacobians, compute them, Jacobians from kept poses.
+REUSE, COMPUTE, JACOBIANS_FROM_POSES = np.int64(0), np.int64(1), np.int64(2)
+YES, NO = np.bool_(True), np.bool_(False)
+ROW0 = np.int64(0)
 
 
 @numba.njit(cache=True)
@@ -60,7 +71,7 @@ def workspace(kin, prog, n):
     return out, W, Jf, r, Jr, L3, E9
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     """Residuals (and Jacobians) of the blocks of ``level`` at ``x``, stacked into ``ws`` rows; returns the rows.
 
@@ -76,7 +87,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
         _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
     if want_jacobian and kinematics >= 1:
         frame_jacobians(x, jint, jgeo, fslot, out, W, Jf)
-    row = 0
+    row = ROW0
     for b in range(bint.shape[0]):
         lv = bint[b, LEVEL]
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
@@ -89,7 +100,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
 def level_value(level, prog, r, weighted) -> float:
     """Σ ρ_b (times the term weights if ``weighted``) over the blocks of ``level`` from stacked residuals ``r``."""
     bint, bflt = prog[0], prog[1]
-    row, total = 0, 0.0
+    row, total = ROW0, 0.0
     for b in range(bint.shape[0]):
         lv = bint[b, LEVEL]
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
@@ -109,8 +120,8 @@ def term_values(x, prog, ws, values):
     out, W, Jf, r, Jr, L3, E9 = ws
     values[:] = 0.0
     for b in range(bint.shape[0]):
-        rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
-        values[bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+        rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, ROW0, NO, L3, E9)
+        values[bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, ROW0, rows)
 
 
 @numba.njit(cache=True)
@@ -186,8 +197,8 @@ def _population(X, kin, prog, V, F, weighted) -> int:
         _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
         f = 0.0
         for b in range(bint.shape[0]):
-            rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, 0, False, L3, E9)
-            value = rho_value(bint[b, RHO], bflt[b, SCALE], r, 0, rows)
+            rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, ROW0, NO, L3, E9)
+            value = rho_value(bint[b, RHO], bflt[b, SCALE], r, ROW0, rows)
             if weighted:
                 f += bflt[b, WEIGHT] * value
             else:
@@ -205,7 +216,7 @@ def residuals_at(x, level, kin, prog, r_out, J_out) -> int:
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     own = workspace(kin, prog, x.shape[0])
     ws = borrow_ws(own)
-    m = linearize(borrow(x), level, kin, prog, ws, True, 1)
+    m = linearize(borrow(x), level, kin, prog, ws, YES, COMPUTE)
     r_out[:m] = ws[3][:m]
     J_out[:m] = ws[4][:m]
     keep_alive(own)
@@ -218,6 +229,6 @@ def task_errors_at(x, kin, prog, errors):
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     own = workspace(kin, prog, x.shape[0])
     ws = borrow_ws(own)
-    linearize(borrow(x), 1, kin, prog, ws, False, 1)
+    linearize(borrow(x), TASK, kin, prog, ws, NO, COMPUTE)
     task_errors(prog, ws[3], errors)
     keep_alive(own)

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..costs.blocks import (HALFSIN, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives,
                             rho_value)
-from ..costs.kernels import level_value, linearize, task_errors, term_values, workspace
+from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_AND_REGULARIZERS, YES,
+                             level_value, linearize, task_errors, term_values, workspace)
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve
@@ -48,7 +49,7 @@ def _rows_of(prog, level) -> int:
 
 @numba.njit(cache=True)
 def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu,
-                          majorize_below=0.0) -> float:
+                          majorize_below) -> float:
     """Weighted value, gradient ``g (n,)`` and Hessian ``H (n, n)`` of the blocks of ``level`` (``< 0``: all
     levels 1 and 2) from the residual rows in ``ws``; ``curvature`` adds their second-order kinematics.
     ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block; norms shorter
@@ -58,7 +59,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
     n = g.shape[0]
     g[:] = 0.0
     H[:] = 0.0
-    row, value = 0, 0.0
+    row, value = ROW0, 0.0
     for b in range(bint.shape[0]):
         lv = bint[b, LEVEL]
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
@@ -104,7 +105,7 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps
         for i in range(n):
             x[i] += dx[i]
         project(x, lower, upper, box_wrap)
-        linearize(x, 1, kin, prog, ws, True, 1)
+        linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
         e_new = np.sqrt(squared_norm(ws[3], m))
         if not e_new < e:
             e = e_new
@@ -133,7 +134,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     ``NOT_APPLICABLE`` (no regularizer, or no freedom left).
     """
     n = x.shape[0]
-    m, q = _rows_of(prog, 1), _rows_of(prog, 2)
+    m, q = _rows_of(prog, TASK), _rows_of(prog, REGULARIZERS)
     stats[0], stats[1], stats[2] = 0, 0, 0
     if q == 0 or m >= n:
         return NOT_APPLICABLE
@@ -156,12 +157,13 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     K, M, rhs, sol, xt, dx = borrow(own[14]), borrow(own[15]), borrow(own[16]), borrow(own[17]), \
         borrow(own[18]), borrow(own[19])
     gr, Hr, mu_r, Hlb, Jc = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23]), borrow(own[24])
-    linearize(x, 1, kin, prog, cur, True, 1)
-    linearize(x, 2, kin, prog, cur_r, True, 0)
+    linearize(x, TASK, kin, prog, cur, YES, COMPUTE)
+    linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     evaluations = 1
     feasible = max(np.sqrt(squared_norm(cur[3], m)), 1e-13)
-    G = level_value(2, prog, cur_r[3], True)
-    objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    G = level_value(REGULARIZERS, prog, cur_r[3], YES)
+    objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
+                          0.0)
     _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
     mu, trust, last_step = MU_START, TRUST_START, 0.0
@@ -173,7 +175,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             break
         iterations += 1
         if not fresh:  # a norm shorter than the last step gets its majorizing curvature
-            objective_derivatives(2, prog, cur_r, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
+            objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                                   2.0 * last_step)
             fresh = True
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
@@ -189,7 +191,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         if nf <= m:
             status = CONVERGED
             break
-        row = 0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
+        row = ROW0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
         k = nf + m
         Kv, Mv, rv, sv = K[:k, :k], M[:k, : k + 1], rhs[:k], sol[:k]
         Hlb[:, :] = H
@@ -245,11 +247,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for i in range(n):
                 xt[i] = x[i] + alpha * dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, 1, kin, prog, tri, True, 1)
+            linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
             e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, feasible)
-            linearize(xt, 2, kin, prog, tri_r, True, 0)
+            linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
             evaluations += 1
-            Gt = level_value(2, prog, tri_r[3], True)
+            Gt = level_value(REGULARIZERS, prog, tri_r[3], YES)
             if e <= 10.0 * feasible and Gt < G:
                 accepted_step = True
                 break
@@ -280,8 +282,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 status = STALLED
                 break
     _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, 0.0)  # to the last bit
-    linearize(x, 2, kin, prog, cur_r, True, 0)
-    objective_derivatives(2, prog, cur_r, smoothing, False, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
+    objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
+                          0.0)
     _multipliers(cur[4][:m], g, Am, Lm, ym, multipliers)
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
@@ -318,12 +321,13 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
     chain_ptr, chain_idx = prog[5], prog[6]
     own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
-    linearize(x, -1, kin, prog, cur, True, 1)
+    linearize(x, TASK_AND_REGULARIZERS, kin, prog, cur, YES, COMPUTE)
     evaluations = 1
     g, H = np.empty(n), np.empty((n, n))
     big = _max_rows(prog)
     gr, Hr, mu_r = np.empty(big), np.empty((big, big)), np.empty(big)
-    F = objective_derivatives(-1, prog, cur, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+    F = objective_derivatives(TASK_AND_REGULARIZERS, prog, cur, smoothing, YES, g, H, chain_ptr, chain_idx, gr,
+                              Hr, mu_r, 0.0)
     Hf, Lf, gf, sf = np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n)
     fidx = np.empty(n, dtype=np.int64)
     xt = np.empty(n)
@@ -336,7 +340,8 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
             break
         iterations += 1
         if not fresh:
-            F = objective_derivatives(-1, prog, cur, smoothing, True, g, H, chain_ptr, chain_idx, gr, Hr, mu_r)
+            F = objective_derivatives(TASK_AND_REGULARIZERS, prog, cur, smoothing, YES, g, H, chain_ptr, chain_idx, gr,
+                                      Hr, mu_r, 0.0)
             fresh = True
         nf = 0
         for i in range(n):  # the coordinates descent along −g does not push through a bound
@@ -364,9 +369,9 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
             xt[fidx[a]] += sv[a]
             step = max(step, abs(sv[a]))
         project(xt, lower, upper, box_wrap)
-        linearize(xt, -1, kin, prog, tri, True, 1)
+        linearize(xt, TASK_AND_REGULARIZERS, kin, prog, tri, YES, COMPUTE)
         evaluations += 1
-        Ft = level_value(-1, prog, tri[3], True)
+        Ft = level_value(TASK_AND_REGULARIZERS, prog, tri[3], YES)
         if Ft < F:
             gain = F - Ft
             cur, tri = tri, cur
@@ -434,10 +439,10 @@ def derivatives_at(x, level, kin, prog, smoothing, curvature):
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     own = workspace(kin, prog, n)
     ws = borrow_ws(own)
-    linearize(borrow(x), level, kin, prog, ws, True, 1)
+    linearize(borrow(x), level, kin, prog, ws, YES, COMPUTE)
     big = _max_rows(prog)
     g, H = np.empty(n), np.empty((n, n))
     value = objective_derivatives(level, prog, ws, smoothing, curvature, g, H, prog[5], prog[6], np.empty(big),
-                                  np.empty((big, big)), np.empty(big))
+                                  np.empty((big, big)), np.empty(big), 0.0)
     keep_alive(own)
     return value, g, H

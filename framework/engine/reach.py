@@ -16,7 +16,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.kernels import linearize, task_errors, term_values, within_tolerance, workspace
+from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import least_norm_step, levenberg_marquardt_step
@@ -110,7 +110,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
     own_ws, own_trial = workspace(kin, prog, n), workspace(kin, prog, n)
     ws, trial = borrow_ws(own_ws), borrow_ws(own_trial)
     project(x, lower, upper, box_wrap)
-    m = linearize(x, 1, kin, prog, ws, True, 1)
+    m = linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
     k = min(m, n)
     own = np.empty(2 * k * k + max(k, n) + 3 * n + m * n)  # one allocation, carved into the scratch arrays
     scratch = borrow(own)
@@ -143,12 +143,12 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, 1, kin, prog, trial, False, 1)  # poses only: most rejected steps end here
+            linearize(xt, TASK, kin, prog, trial, NO, COMPUTE)  # poses only: most rejected steps end here
             evaluations += 1
             et = squared_norm(trial[3], m)
             if et < e:
                 accepted = True
-                linearize(xt, 1, kin, prog, trial, True, 2)
+                linearize(xt, TASK, kin, prog, trial, YES, JACOBIANS_FROM_POSES)
                 ws, trial = trial, ws
                 x[:] = xt
                 e = et
@@ -170,7 +170,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
             next_start += 1
             restarts += 1
             project(x, lower, upper, box_wrap)
-            linearize(x, 1, kin, prog, ws, True, 1)
+            linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
             evaluations += 1
             e = squared_norm(ws[3], m)
             if e < best_e:
@@ -184,7 +184,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, 1, kin, prog, trial, True, 1)
+            linearize(xt, TASK, kin, prog, trial, YES, COMPUTE)
             evaluations += 1
             et = squared_norm(trial[3], m)
             if not et < e:
@@ -195,7 +195,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
         task_errors(prog, ws[3], errors)
     else:
         x[:] = best
-        linearize(x, 1, kin, prog, ws, False, 1)
+        linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
         task_errors(prog, ws[3], errors)
     term_values(x, prog, ws, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, restarts
