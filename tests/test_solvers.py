@@ -323,3 +323,17 @@ def test_progress_prints_a_few_lines_to_stderr(capsys):
     lines = capsys.readouterr().err.strip().splitlines()
     assert 2 <= len(lines) <= 21
     assert "iteration 100/100" in lines[-1]
+
+
+def test_solver_names_are_one_name_space():
+    """A metaheuristic named like an IK solver (or the reverse) would shadow it in solve(): refused, by name."""
+    from framework.solvers import register, register_ik
+    from framework.solvers.registry import IK_SOLVERS, SOLVERS
+
+    before = (dict(SOLVERS), dict(IK_SOLVERS))
+    with pytest.raises(SolverError, match="'hybrid' is already registered"):
+        register("hybrid")(type("Shadow", (get_solver("de"),), {}))
+    with pytest.raises(SolverError, match="'de' is already registered"):
+        register_ik("de")(type("Shadow", (), {}))
+    assert (SOLVERS, IK_SOLVERS) == before  # nothing half-registered
+    assert register("de")(get_solver("de")) is get_solver("de")  # the same class again is not a collision

@@ -25,17 +25,23 @@ IK_SOLVERS: dict[str, type] = {}
 _DEFAULT_INSTANCES: dict[str, object] = {}  # an immutable cache: solvers keep no state between solves
 
 
-def register(name: str) -> Callable[[A], A]:
-    """Class decorator registering an algorithm under ``name`` (also sets its ``name`` attribute)."""
+def _registrar(table: dict, name: str) -> Callable[[A], A]:
+    """A class decorator adding a class to ``table`` under ``name``: one name space over both tables."""
 
     def decorate(cls: A) -> A:
-        if name in SOLVERS and SOLVERS[name] is not cls:
-            raise SolverError(f"Solver name {name!r} is already registered by {SOLVERS[name].__name__}.")
+        for known in (SOLVERS, IK_SOLVERS):
+            if name in known and known[name] is not cls:
+                raise SolverError(f"Solver name {name!r} is already registered by {known[name].__name__}.")
         cls.name = name
-        SOLVERS[name] = cls
+        table[name] = cls
         return cls
 
     return decorate
+
+
+def register(name: str) -> Callable[[A], A]:
+    """Class decorator registering an algorithm under ``name`` (also sets its ``name`` attribute)."""
+    return _registrar(SOLVERS, name)
 
 
 def available_solvers() -> list[str]:
@@ -53,15 +59,7 @@ def get_solver(name: str) -> type[Algorithm]:
 
 def register_ik(name: str) -> Callable[[A], A]:
     """Class decorator registering an :class:`~framework.solvers.ik.IKSolver` under ``name``."""
-
-    def decorate(cls):
-        if name in IK_SOLVERS or name in SOLVERS:
-            raise SolverError(f"Solver name {name!r} is already registered.")
-        cls.name = name
-        IK_SOLVERS[name] = cls
-        return cls
-
-    return decorate
+    return _registrar(IK_SOLVERS, name)
 
 
 def solver_names() -> list[str]:
