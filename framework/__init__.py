@@ -25,6 +25,7 @@ from .loading import load_robot, robot_from_urdf, robot_index
 from .problem import Evaluation, Problem
 from .robot import Joint, JointKind, Robot
 from .solve import IKResult, solve
+from .batch import BatchResult, solve_batch
 from .solvers import solver_names
 
 __version__ = "0.1.0"
@@ -44,6 +45,8 @@ __all__ = [
     "Term",
     "solver_names",
     "solve",
+    "solve_batch",
+    "BatchResult",
     "FramePoses",
     "Joint",
     "JointKind",

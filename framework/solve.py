@@ -106,6 +106,30 @@ def solve(
             hybrid); returning True stops. Recordings use it to trace every term.
     """
     start = time.perf_counter()
+    request = make_request(problem, seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance,
+                           time_budget=time_budget, max_iterations=max_iterations, population=population,
+                           initial=initial, stop_at_tolerance=stop_at_tolerance, callback=callback, progress=progress)
+    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
+    outcome = method.solve(problem, request)
+    return _result(problem, outcome, method.name, request, start)
+
+
+def make_request(
+    problem: Problem,
+    *,
+    seed: int | np.random.Generator = 0,
+    tolerance: float = DEFAULT_TOLERANCE,
+    angle_tolerance: float | None = None,
+    time_budget: float | None = None,
+    max_iterations: int | None = None,
+    population: int = 30,
+    initial: np.ndarray | None = None,
+    stop_at_tolerance: bool = False,
+    callback: Callable[[int, float, np.ndarray], bool | None] | None = None,
+    progress: bool = False,
+) -> Request:
+    """The validated :class:`~framework.solvers.Request` of :func:`solve`'s arguments (the time budget's
+    deadline counts from now); bad values raise :class:`SolverError` naming them."""
     deadline = None
     if time_budget is not None:
         if not _positive(time_budget):
@@ -120,8 +144,7 @@ def solve(
     population = positive_int(population, "population")
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
-    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
-    request = Request(
+    return Request(
         rng=_lazy_generator(seed),
         tolerance=float(tolerance),
         angle_tolerance=float(tolerance if angle_tolerance is None else angle_tolerance),
@@ -133,8 +156,6 @@ def solve(
         callback=callback,
         progress=progress,
     )
-    outcome = method.solve(problem, request)
-    return _result(problem, outcome, method.name, request, start)
 
 
 def _positive(value: Any) -> bool:

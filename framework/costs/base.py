@@ -18,6 +18,7 @@ cannot.
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
@@ -49,6 +50,8 @@ class Term:
     frames: tuple[str, ...] = ()
     level: str = "regularizer"
     version: int = 0
+    #: Whether :meth:`set_target` moves a target (tracking and batches move it).
+    has_target: bool = False
 
     @property
     def is_task(self) -> bool:
@@ -86,6 +89,24 @@ class Term:
 
         X = robot.check_population(X, finite=False)
         return Program(robot, Objective(((1.0, self),))).values(X)[:, 0]
+
+    def set_target(self, target) -> None:
+        """Move the term's target (terms with a target override this and set :attr:`has_target`)."""
+        raise TaskError(f"term {self.name!r} ({type(self).__name__}) has no target to move")
+
+    def target_parameters(self, robot: Robot, targets: Sequence) -> np.ndarray:
+        """``(B, p)``: the parameters of the term's blocks (concatenated in block order) for each of ``targets``,
+        each validated as :meth:`set_target` validates it; the term itself does not move."""
+        probe = copy.copy(self)
+        probe.__dict__.pop("_packed", None)
+        rows = []
+        for k, target in enumerate(targets):
+            try:
+                probe.set_target(target)
+            except TaskError as err:
+                raise TaskError(f"target {k}: {err}") from None
+            rows.append(np.concatenate([b.params for b in probe.blocks(robot) or ()]))
+        return np.array(rows, dtype=float).reshape(len(rows), -1)
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""
@@ -162,6 +183,21 @@ class Objective:
     @property
     def frames(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(f for _, t in self.terms for f in t.frames))
+
+
+def finite_rows(values, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``values`` as a float ``(B, *shape)`` array of finite numbers; raises :class:`TaskError` naming ``what``
+    and the first bad item."""
+    try:
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise TaskError(f"{what} must be numbers of shape (B, {', '.join(map(str, shape))})") from None
+    if array.ndim != len(shape) + 1 or array.shape[1:] != shape:
+        raise TaskError(f"{what} must have shape (B, {', '.join(map(str, shape))}); got {array.shape}")
+    bad = np.flatnonzero(~np.isfinite(array.reshape(array.shape[0], -1)).all(axis=1))
+    if bad.size:
+        raise TaskError(f"{what}: item {bad[0]} holds NaN or inf")
+    return array
 
 
 def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str | Callable[[], str]) -> np.ndarray:

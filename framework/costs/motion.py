@@ -25,6 +25,7 @@ class Motion(Term):
     """
 
     level = "regularizer"
+    has_target = True
 
     def __init__(self, group: str, previous: Sequence[float], *, norm: str = "l2", name: str | None = None):
         if norm not in NORMS:

@@ -8,7 +8,7 @@ import pinocchio as pin
 from ..errors import TaskError
 from ..robot import Robot
 from . import blocks as B
-from .base import Term, as_vector
+from .base import Term, as_vector, finite_rows
 from .orientation import rotation_from
 from .program import Block
 
@@ -42,6 +42,7 @@ class Pose(Term):
     """
 
     level = "task"
+    has_target = True
 
     def __init__(self, frame: str, target, *, name: str | None = None):
         self.frame = frame
@@ -53,6 +54,22 @@ class Pose(Term):
         """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""
         self.position, self.rotation = pose_from(target, f"pose target of {self.frame!r}")
         self._touch()
+
+    def target_parameters(self, robot: Robot, targets) -> np.ndarray:
+        """``(B, 12)`` positions and row-major rotations of a batch of poses: ``(B, 4, 4)`` homogeneous matrices
+        are validated at once (as :meth:`set_target` validates one); other forms one by one."""
+        if not (isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (4, 4)):
+            return super().target_parameters(robot, targets)
+        what = f"pose targets of {self.frame!r}"
+        T = finite_rows(targets, (4, 4), what)
+        R = T[:, :3, :3]
+        defect = np.abs(np.einsum("bki,bkj->bij", R, R) - np.eye(3)).max(axis=(1, 2))
+        bad = np.flatnonzero((np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > 1e-9) | (defect > 1e-6)
+                             | (np.linalg.det(R) <= 0))
+        if bad.size:
+            raise TaskError(f"{what}: item {bad[0]} is not a homogeneous transform (last row [0, 0, 0, 1], a "
+                            f"rotation with RᵀR = I and det > 0)")
+        return np.concatenate([T[:, :3, 3], R.reshape(-1, 9)], axis=1)
 
     @property
     def target(self) -> pin.SE3:

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..robot import Robot
 from . import blocks as B
-from .base import Term, as_vector
+from .base import Term, as_vector, finite_rows
 from .program import Block
 
 
@@ -19,6 +19,7 @@ class Position(Term):
     """
 
     level = "task"
+    has_target = True
 
     def __init__(self, frame: str, target: Sequence[float], *, name: str | None = None):
         self.frame = frame
@@ -30,6 +31,10 @@ class Position(Term):
         """Move the target point ``(3,)`` [m, world] (a problem holding the term re-reads it)."""
         self.target = as_vector(target, 3, lambda: f"position target of {self.frame!r}")
         self._touch()
+
+    def target_parameters(self, robot: Robot, targets: Sequence) -> np.ndarray:
+        """``(B, 3)`` target points [m, world] of a batch, validated at once."""
+        return finite_rows(targets, (3,), f"position targets of {self.frame!r}")
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         return (Block(B.POSITION, B.NORM, 3, self.frames, self.target, tolerance=B.TOL_LINEAR),)

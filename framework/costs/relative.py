@@ -20,6 +20,7 @@ class RelativePosition(Term):
     """
 
     level = "task"
+    has_target = True
 
     def __init__(self, frame_a: str, frame_b: str, offset: Sequence[float], *, name: str | None = None):
         self.frame_a, self.frame_b = frame_a, frame_b

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
-from .ik import IKSolver, Outcome, Request, positive_int
+from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
 from .metaheuristic import compiled_or_loop, shared_loop, within
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
@@ -78,6 +78,18 @@ class Hybrid(IKSolver):
     def __init__(self, options=None):
         super().__init__(options)
         self.static_settings = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
+
+    def batch_plan(self, problem, request: Request) -> BatchPlan | None:
+        """The engine from the warm start (restarts after it only from the box middle); none when a global phase
+        comes first or the weighted sum decides (``priorities`` off with regularizers)."""
+        o = self.options
+        if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers):
+            return None
+        x0, start = start_configuration(problem, request, o.warm_start)
+        settings = local_settings(request, o, default_iterations(request))
+        if start == "middle" or not o.restarts:
+            return BatchPlan(x0, settings, settings if o.restarts else None)
+        return BatchPlan(x0, _in_basin(settings), None)
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options

@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import SolverError
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..engine import LocalSettings
     from ..problem import Problem
 
 Callback = Callable[[int, float, np.ndarray], "bool | None"]
@@ -73,6 +74,17 @@ class Outcome(NamedTuple):
     values: np.ndarray | None = None
 
 
+class BatchPlan(NamedTuple):
+    """How a solve begins when its beginning is the local engine alone, so :func:`framework.solve_batch` can run
+    it compiled over a whole batch: the first start ``x0 (n,)``, the settings of the first descent (from ``x0``,
+    no random restart), and those of the random restarts that follow it (``None``: whatever follows the first
+    descent needs the solver itself). An item whose task is not reached that way is solved by the solver."""
+
+    x0: np.ndarray
+    first: LocalSettings
+    restarts: LocalSettings | None
+
+
 @dataclass(frozen=True)
 class NoOptions:
     """A solver without options."""
@@ -104,6 +116,11 @@ class IKSolver(ABC):
     @abstractmethod
     def solve(self, problem: Problem, request: Request) -> Outcome:
         """Solve ``problem`` as ``request`` asks."""
+
+    def batch_plan(self, problem: Problem, request: Request) -> BatchPlan | None:
+        """The engine-only beginning of :meth:`solve` for ``request``, or ``None`` (the default: a batch is solved
+        one item at a time through :meth:`solve`)."""
+        return None
 
     @classmethod
     def defaults(cls) -> dict[str, Any]:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..engine import LocalSettings, solve_local
-from .ik import IKSolver, Outcome, Request, positive_int
+from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
 from .registry import register_ik
 
 #: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is given neither an iteration nor a time budget.
@@ -90,6 +90,11 @@ class MultistartLM(IKSolver):
     reference = "Beeson & Ames, TRAC-IK, Humanoids 2015 (restarts); Marquardt, SIAM J. Appl. Math. 11 (1963)"
     Options = MultistartOptions
     uses_jacobians = True
+
+    def batch_plan(self, problem, request: Request) -> BatchPlan:
+        x0, _ = start_configuration(problem, request, self.options.warm_start)
+        settings = local_settings(request, self.options, default_iterations(request))
+        return BatchPlan(x0, settings, settings if self.options.restarts else None)
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)

@@ -1,0 +1,253 @@
+"""``solve_batch(problem, targets)``: one problem, a batch of targets, each item as ``solve`` would solve it.
+
+Item ``i`` is the problem with its targets moved to ``targets[i]``, solved with seed ``seed + i``: the result
+is the one :func:`framework.solve` returns for it (the same configuration, bit for bit, when no time budget
+binds). The speed comes from where the work runs. A solver whose solve begins with the local engine alone
+(its :meth:`~framework.solvers.ik.IKSolver.batch_plan`: ``hybrid``, ``multistart_lm``) has that beginning run
+for every item in one compiled loop (:mod:`framework.engine.batch`) on every core: the first descent, then for
+the items that stall, the same random restarts ``solve`` would draw from the same seed. The few items still
+unsolved (and every item of other solvers) go through ``solve`` itself.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .costs.base import Term
+from .engine.batch import BatchState, descend_batch
+from .engine.local import RESTART_BATCH
+from .engine.reach import DEADLINE, REACHED, STARTS
+from .errors import SolverError, TaskError
+from .problem import Problem
+from .solve import DEFAULT_SOLVER, DEFAULT_TOLERANCE, make_request, solve
+from .solvers import ik_solver
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """What :func:`solve_batch` produced, one row per item.
+
+    Attributes:
+        configurations: ``(B, n)`` joint coordinates [rad / m].
+        success: ``(B,)`` every task block of the item within its tolerance.
+        errors: ``(B, blocks)`` each task block's error [m or rad], named by ``error_names``.
+        costs: ``(B,)`` the weighted objective at each configuration.
+        iterations: ``(B,)`` solver iterations.
+        compiled: ``(B,)`` solved in the compiled batch loop (``False``: by ``solve``, one at a time).
+        wall_time: seconds for the whole batch; solver: the solver's name.
+    """
+
+    configurations: np.ndarray
+    success: np.ndarray
+    errors: np.ndarray
+    error_names: tuple[str, ...]
+    costs: np.ndarray
+    iterations: np.ndarray
+    compiled: np.ndarray
+    wall_time: float
+    solver: str
+
+    def __len__(self) -> int:
+        return int(self.success.shape[0])
+
+    @property
+    def success_rate(self) -> float:
+        """Fraction of items solved within tolerance."""
+        return float(np.mean(self.success)) if len(self) else 0.0
+
+    @property
+    def throughput(self) -> float:
+        """Items per second of wall time."""
+        return len(self) / self.wall_time if self.wall_time > 0 else float("inf")
+
+
+def solve_batch(
+    problem: Problem,
+    targets: Sequence | np.ndarray | Mapping[str, Sequence | np.ndarray],
+    solver: str | None = None,
+    *,
+    seed: int | Sequence[int] = 0,
+    tolerance: float = DEFAULT_TOLERANCE,
+    angle_tolerance: float | None = None,
+    time_budget: float | None = None,
+    max_iterations: int | None = None,
+    initial: np.ndarray | None = None,
+    options: Mapping[str, Any] | None = None,
+    workers: int | None = None,
+    progress: bool | None = None,
+) -> BatchResult:
+    """Solve ``problem`` for every target of a batch.
+
+    Args:
+        problem: the problem; its targeted terms are left as they were.
+        targets: one target per item for the problem's one task term with a target — ``(B, 3)`` points for a
+            :class:`~framework.costs.Position`, ``(B, 4, 4)`` matrices or ``B`` ``pinocchio.SE3`` for a
+            :class:`~framework.costs.Pose`, anything its ``set_target`` takes — or ``{term name: targets}``.
+        solver: as :func:`framework.solve` (default ``"hybrid"``).
+        seed: item ``i`` is solved with ``seed + i``, or with ``seed[i]`` for a sequence of ``B`` seeds.
+        tolerance, angle_tolerance, max_iterations, options: as :func:`framework.solve`, per item.
+        time_budget: seconds per item.
+        initial: ``(B, n)`` a warm start per item (default: the problem's own start, as ``solve``).
+        workers: threads of the compiled loop (default: every core).
+        progress: a progress bar (default: when stderr is a terminal).
+    """
+    started = time.perf_counter()
+    P, B = _parameters(problem, targets)
+    seeds = _seeds(seed, B)
+    if initial is not None:
+        initial = problem.robot.check_population(initial, "initial configurations")
+        if initial.shape[0] != B:
+            raise SolverError(f"initial holds {initial.shape[0]} configurations for {B} targets")
+    kwargs = dict(tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
+                  max_iterations=max_iterations)
+    template = make_request(problem, initial=None if initial is None else initial[:1], **kwargs)
+    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
+    program = problem.program
+    plan = method.batch_plan(problem, template) if B else None
+    n = problem.robot.n
+    state = BatchState.start(program, np.tile(plan.x0 if plan else np.zeros(n), (B, 1)) if initial is None
+                             else initial)
+    with _Bar(progress, B, f"batch IK ({method.name})") as bar:
+        if plan is not None and program.task_rows:
+            everything = np.arange(B, dtype=np.int64)
+            descend_batch(program, P, state, everything, plan.first, time_budget=time_budget, workers=workers,
+                          progress=bar.advance_compiled)
+            stalled = everything[(state.codes == STARTS) & (state.counts[:, 0] < plan.first.max_iterations)]
+            if plan.restarts is not None and stalled.size:
+                lower, upper = problem.robot.lower, problem.robot.upper
+                draws = np.stack([lower + (upper - lower) * np.random.default_rng(int(seeds[i])).random(
+                    (RESTART_BATCH + 1, n)) for i in stalled])
+                state.X[stalled] = draws[:, 0]
+                state.counts[stalled, 2] += 1
+                descend_batch(program, P, state, stalled, plan.restarts, starts=np.ascontiguousarray(draws[:, 1:]),
+                              time_budget=time_budget, workers=workers)
+            done = (state.codes == REACHED) | (state.codes == DEADLINE)
+        else:
+            done = np.zeros(B, dtype=bool)
+        bar.compiled_done(int(done.sum()))
+        costs = state.V @ program.weights
+        iterations = state.counts[:, 0].copy()
+        rest = np.flatnonzero(~done)
+        if rest.size:
+            _solve_each(problem, targets, rest, seeds, initial, state, costs, iterations, method.name, options,
+                        kwargs, bar)
+    angular = np.array(program.task_angular, dtype=bool)
+    limits = np.where(angular, template.angle_tolerance, template.tolerance)
+    success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
+    return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,
+                       time.perf_counter() - started, method.name)
+
+
+def _solve_each(problem: Problem, targets, items: np.ndarray, seeds: np.ndarray, initial, state: BatchState,
+                costs: np.ndarray, iterations: np.ndarray, solver: str, options, kwargs: dict, bar: _Bar) -> None:
+    """Solve ``items`` one at a time with :func:`solve` (the problem's targets restored afterwards)."""
+    moved = _targeted(problem, targets)
+    saved = {name: dict(term.__dict__) for name, (term, _) in moved.items()}
+    try:
+        for i in items:
+            for term, column in moved.values():
+                term.set_target(column[i])
+            result = solve(problem, solver, seed=int(seeds[i]), options=options,
+                           initial=None if initial is None else initial[i], **kwargs)
+            state.X[i] = result.configuration
+            state.E[i] = [result.errors[name] for name in problem.program.task_blocks]
+            costs[i], iterations[i] = result.cost, result.iterations
+            bar.advance(1)
+    finally:
+        for name, (term, _) in moved.items():
+            version = term.version  # versions only grow: programs that read the moved targets re-read these
+            term.__dict__.update(saved[name])
+            term.version = version
+            term._touch()
+
+
+def _targeted(problem: Problem, targets) -> dict[str, tuple[Term, Sequence]]:
+    """``{term name: (term, its targets)}`` for the terms ``targets`` moves."""
+    terms = dict(zip(problem.names, problem.program.terms))
+    if isinstance(targets, Mapping):
+        unknown = sorted(set(targets) - set(terms))
+        if unknown:
+            raise TaskError(f"targets name terms the problem does not have: {unknown}; its terms are "
+                            f"{list(terms)}")
+        return {name: (terms[name], column) for name, column in targets.items()}
+    movable = [name for name, term in terms.items() if term.is_task and term.has_target]
+    if len(movable) != 1:
+        raise TaskError(f"the problem has {len(movable)} task terms with a target ({movable}); give targets as "
+                        "{term name: targets}")
+    return {movable[0]: (terms[movable[0]], targets)}
+
+
+def _parameters(problem: Problem, targets) -> tuple[np.ndarray, int]:
+    """``(B, p)`` the program's parameters of every item, and ``B``."""
+    program = problem.program
+    program.refresh()
+    columns = {}
+    for name, (term, column) in _targeted(problem, targets).items():
+        columns[name] = term.target_parameters(problem.robot, column)
+    sizes = {len(c) for c in columns.values()}
+    if len(sizes) != 1:
+        raise TaskError(f"every term needs one target per item; got {dict((k, len(v)) for k, v in columns.items())}")
+    B = sizes.pop()
+    P = np.tile(program.prog[2], (B, 1))
+    for k, name in enumerate(problem.names):
+        if name in columns:
+            at = 0
+            for start, stop in program.layout.param_slices[k]:
+                P[:, start:stop] = columns[name][:, at : at + stop - start]
+                at += stop - start
+    return P, B
+
+
+def _seeds(seed: int | Sequence[int], B: int) -> np.ndarray:
+    """Item seeds: ``seed + i``, or the ``B`` given ones."""
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        if seed < 0:
+            raise SolverError(f"seed must be an integer >= 0; got {seed!r}")
+        return int(seed) + np.arange(B, dtype=np.int64)
+    seeds = np.asarray(seed)
+    if seeds.shape != (B,) or seeds.dtype.kind not in "iu" or (seeds < 0).any():
+        raise SolverError(f"seed must be an integer >= 0 or {B} of them (one per item); got {seed!r}")
+    return seeds.astype(np.int64)
+
+
+class _Bar:
+    """A rich progress bar over a batch's items, or nothing (not a terminal, or ``enabled=False``)."""
+
+    def __init__(self, enabled: bool | None, total: int, description: str):
+        self.enabled, self.total, self.description = enabled, total, description
+        self._bar = None
+
+    def __enter__(self) -> _Bar:  # noqa: PYI034
+        from rich.console import Console
+
+        console = Console(stderr=True)
+        if (console.is_terminal if self.enabled is None else self.enabled) and self.total:
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+            self._bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                 TimeRemainingColumn(), console=console, transient=True)
+            self._bar.__enter__()
+            self._task = self._bar.add_task(self.description, total=self.total)
+        return self
+
+    def advance_compiled(self, done: int) -> None:
+        """Items through the first compiled pass (shown as done; the few it leaves are taken back later)."""
+        self.advance(done)
+
+    def compiled_done(self, finished: int) -> None:
+        """The compiled passes finished ``finished`` items: the bar shows those."""
+        if self._bar is not None:
+            self._bar.update(self._task, completed=finished)
+
+    def advance(self, count: int) -> None:
+        if self._bar is not None:
+            self._bar.update(self._task, advance=count)
+
+    def __exit__(self, *exc) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)

@@ -1,0 +1,133 @@
+"""The local engine over a batch of items: one packed problem, one parameter row per item, one compiled loop.
+
+:func:`descend` runs, for each item in turn, exactly what :func:`~framework.engine.local.solve_local` runs
+for one problem: the item's parameters (its targets) are written into the program, :func:`~.reach.reach`
+drives the task from the item's start (through its restart configurations, if it has any) and, when the task
+is reached, :func:`~.newton.regularize` minimizes the regularizers on it. The loop releases the GIL, so
+threads run chunks of a batch on all cores, each with its own copy of the program's parameters.
+
+:func:`descend_batch` is the Python side: chunks, threads, a progress callback.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..costs.program import Program
+from . import newton
+from .clock import monotonic_ns
+from .local import LocalSettings, search_box
+from .reach import REACHED, reach
+
+#: Items per compiled call at most (the unit of work a thread takes, and of progress reports).
+CHUNK = 256
+
+
+@numba.njit(cache=True, nogil=True)
+def descend(items, X, starts, P, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations,
+            stall, budget_ns, polish, regularize, regularize_iterations, smoothing, task_rows, E, V, codes, counts,
+            spent_ns) -> None:
+    """Solve the items ``items`` of a batch in place, one after the other.
+
+    Args:
+        items: ``int64 (k,)`` item indices.
+        X: ``(B, n)`` starts; on return each solved item's configuration.
+        starts: ``(k, S, n)`` restart configurations of each listed item (``S = 0``: none).
+        P: ``(B, p)`` each item's program parameters (written into ``prog[2]`` before its solve).
+        max_iterations: ``int64 (B,)`` Levenberg-Marquardt iterations left per item.
+        budget_ns: ``int64 (B,)`` nanoseconds left per item (``<= 0`` in the first entry: no budget).
+        regularize: minimize the regularizers after reaching the task; task_rows: the task's residual rows.
+        E: ``(B, blocks)`` out: task block errors; V: ``(B, terms)`` out: term values.
+        codes: ``int64 (B,)`` out: :func:`reach`'s status; counts: ``int64 (B, 3)`` iterations, evaluations
+            and restarts, added to; spent_ns: ``int64 (B,)`` time spent, added to.
+    """
+    params = prog[2]
+    stats = np.empty(3, dtype=np.int64)
+    multipliers = np.zeros(task_rows)
+    for t in range(items.shape[0]):
+        i = items[t]
+        params[:] = P[i]
+        begin = monotonic_ns()
+        deadline = begin + budget_ns[i] if budget_ns[i] > 0 else 0
+        x = X[i]
+        code = reach(x, starts[t], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations[i],
+                     stall, deadline, polish, E[i], V[i], stats)
+        counts[i, 0] += stats[0]
+        counts[i, 1] += stats[1]
+        counts[i, 2] += stats[2]
+        if code == REACHED and regularize:
+            multipliers[:] = 0.0
+            newton.regularize(x, lower, upper, box_wrap, kin, prog, smoothing, regularize_iterations, deadline,
+                              multipliers, E[i], V[i], stats)
+            counts[i, 1] += stats[1]
+        codes[i] = code
+        spent_ns[i] += monotonic_ns() - begin
+
+
+class BatchState(NamedTuple):
+    """The arrays :func:`descend` fills: configurations, errors, values, status, counts and time per item."""
+
+    X: np.ndarray
+    E: np.ndarray
+    V: np.ndarray
+    codes: np.ndarray
+    counts: np.ndarray
+    spent_ns: np.ndarray
+
+    @classmethod
+    def start(cls, program: Program, X0: np.ndarray) -> BatchState:
+        B = X0.shape[0]
+        return cls(np.array(X0, dtype=float, order="C"), np.zeros((B, program.task_block_rows.size)),
+                   np.zeros((B, len(program.terms))), np.full(B, -1, dtype=np.int64), np.zeros((B, 3), np.int64),
+                   np.zeros(B, dtype=np.int64))
+
+
+def descend_batch(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
+                  *, starts: np.ndarray | None = None, time_budget: float | None = None, workers: int | None = None,
+                  progress: Callable[[int], None] | None = None) -> None:
+    """Run :func:`descend` over ``items`` in chunks of :data:`CHUNK` on ``workers`` threads (default: every core).
+
+    ``starts`` ``(len(items), S, n)``: each item's restart configurations (default none); ``time_budget``: seconds
+    per item, counted from its first descent; ``progress(done)`` is called after each chunk, in this thread.
+    """
+    program.refresh()
+    lower, upper, box_wrap = search_box(program)
+    n = program.robot.n
+    left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
+    if time_budget is None:
+        budget = np.zeros(state.X.shape[0], dtype=np.int64)
+    else:
+        budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
+    regularize = bool(settings.regularize and program.has_regularizers)
+    workers = max(1, workers or os.cpu_count() or 1)
+    size = max(1, min(CHUNK, -(-len(items) // workers)))  # small batches still spread over every thread
+    chunks = [np.arange(a, min(a + size, len(items))) for a in range(0, len(items), size)]
+
+    def run(positions: np.ndarray) -> int:
+        prog = list(program.prog)
+        prog[2] = prog[2].copy()  # each thread writes the items' targets into its own parameters
+        chunk_starts = np.zeros((len(positions), 0, n)) if starts is None else np.ascontiguousarray(starts[positions])
+        chunk_items = np.ascontiguousarray(items[positions], dtype=np.int64)
+        descend(chunk_items, state.X, chunk_starts, P, lower, upper, box_wrap, program.kin, tuple(prog),
+                settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish, regularize,
+                settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V, state.codes, state.counts,
+                state.spent_ns)
+        return len(positions)
+
+    workers = min(workers, len(chunks))
+    if workers == 1:
+        for chunk in chunks:
+            done = run(chunk)
+            if progress:
+                progress(done)
+        return
+    with ThreadPoolExecutor(workers) as pool:
+        for done in pool.map(run, chunks):
+            if progress:
+                progress(done)

@@ -1,0 +1,120 @@
+"""solve_batch: every item as `solve` solves it (bit for bit without a time budget), checked by Pinocchio FK."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.errors import SolverError, TaskError
+
+
+def _poses(robot: fw.Robot, frame: str, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """FK-sampled reachable poses ``(count, 4, 4)`` and the configurations they come from."""
+    rng = np.random.default_rng(seed)
+    Q = robot.lower + (robot.upper - robot.lower) * rng.random((count, robot.n))
+    return np.array([robot.frame_placement(q, frame).homogeneous for q in Q]), Q
+
+
+@pytest.fixture(scope="module")
+def puma():
+    robot = fw.load_robot("puma560")
+    T, _ = _poses(robot, "ee", 80, 7)
+    return robot, T
+
+
+@pytest.mark.parametrize("solver", ["hybrid", "multistart_lm"])
+def test_batch_items_equal_one_by_one_solves(puma, solver):
+    robot, T = puma
+    problem = fw.Problem(robot, fw.Pose("ee", T[0]))
+    batch = fw.solve_batch(problem, T, solver, seed=11, tolerance=1e-7)
+    assert batch.compiled.mean() > 0.9  # most items in the compiled loop (else this test checks nothing new)
+    for i in range(len(T)):
+        one = fw.solve(fw.Problem(robot, fw.Pose("ee", T[i])), solver, seed=11 + i, tolerance=1e-7)
+        np.testing.assert_array_equal(batch.configurations[i], one.configuration)
+        assert batch.success[i] == one.success
+        assert batch.costs[i] == pytest.approx(one.cost, abs=1e-15)
+        assert batch.errors[i].tolist() == [one.errors[name] for name in batch.error_names]
+    assert batch.success.all()  # FK-sampled poses are reachable: a trivial method (the start) reaches none
+
+
+def test_successes_hold_by_pinocchio_fk(puma):
+    robot, T = puma
+    batch = fw.solve_batch(fw.Problem(robot, fw.Pose("ee", T[0])), T, tolerance=1e-9)
+    model = robot.model
+    data = model.createData()
+    frame = model.getFrameId("ee")
+    for x, target, ok in zip(batch.configurations, T, batch.success):
+        pin.framesForwardKinematics(model, data, robot.to_pinocchio(x[None])[0])
+        M = data.oMf[frame]
+        position = np.linalg.norm(M.translation - target[:3, 3])
+        angle = np.linalg.norm(pin.log3(target[:3, :3].T @ M.rotation))
+        assert ok == (position <= 1e-9 and angle <= 1e-9)
+    assert batch.success_rate == 1.0
+
+
+def test_two_terms_regularized_and_targets_restored():
+    """Two hands moved per item ({term: targets}), motion minimized on the task: as solve, and the problem's own
+    targets are where they were afterwards."""
+    robot = fw.load_robot("youbot_dual_mobile")
+    rng = np.random.default_rng(3)
+    Q = robot.lower + (robot.upper - robot.lower) * rng.random((12, robot.n))
+    P1 = np.array([robot.frame_placement(q, "arm1_ee").translation for q in Q])
+    P2 = np.array([robot.frame_placement(q, "arm2_ee").translation for q in Q])
+    hand1, hand2 = fw.Position("arm1_ee", [0.3, 0.0, 0.4]), fw.Position("arm2_ee", [0.3, 0.2, 0.4])
+    problem = fw.Problem(robot, hand1 + hand2 + 0.1 * fw.Motion("base", robot.middle) + 0.4 * fw.Motion(
+        "arm1", robot.middle) + 0.4 * fw.Motion("arm2", robot.middle))
+    batch = fw.solve_batch(problem, {hand1.name: P1, hand2.name: P2}, seed=5, tolerance=1e-8)
+    assert hand1.target.tolist() == [0.3, 0.0, 0.4] and hand2.target.tolist() == [0.3, 0.2, 0.4]
+    for i in range(len(Q)):
+        one = fw.solve(fw.Problem(robot, fw.Position("arm1_ee", P1[i]) + fw.Position("arm2_ee", P2[i])
+                                  + 0.1 * fw.Motion("base", robot.middle) + 0.4 * fw.Motion("arm1", robot.middle)
+                                  + 0.4 * fw.Motion("arm2", robot.middle)), seed=5 + i, tolerance=1e-8)
+        np.testing.assert_array_equal(batch.configurations[i], one.configuration)
+        assert batch.costs[i] == pytest.approx(one.cost, rel=1e-12, abs=1e-15)
+    assert batch.success.all()
+    after = fw.solve(problem, seed=0, tolerance=1e-8)  # the problem solves its own targets again
+    assert np.linalg.norm(robot.frame_placement(after.configuration, "arm1_ee").translation - [0.3, 0, 0.4]) < 1e-8
+
+
+def test_warm_starts_threads_and_other_solvers(puma):
+    robot, T = puma
+    problem = fw.Problem(robot, fw.Pose("ee", T[0]))
+    _, Q = _poses(robot, "ee", 20, 7)
+    near = Q + 0.05  # a warm start near each pose's own configuration
+    one_thread = fw.solve_batch(problem, T[:20], initial=near, seed=3, workers=1)
+    two = fw.solve_batch(problem, T[:20], initial=near, seed=3, workers=2)
+    np.testing.assert_array_equal(one_thread.configurations, two.configurations)
+    first = fw.solve(fw.Problem(robot, fw.Pose("ee", T[0])), seed=3, initial=near[0])
+    np.testing.assert_array_equal(one_thread.configurations[0], first.configuration)
+    # a metaheuristic has no compiled batch plan: item by item through solve, same answers
+    de = fw.solve_batch(problem, T[:3], "de", seed=2, max_iterations=20)
+    assert not de.compiled.any()
+    for i in range(3):
+        one = fw.solve(fw.Problem(robot, fw.Pose("ee", T[i])), "de", seed=2 + i, max_iterations=20)
+        np.testing.assert_array_equal(de.configurations[i], one.configuration)
+
+
+def test_bad_batches_are_named_errors(puma):
+    robot, T = puma
+    problem = fw.Problem(robot, fw.Pose("ee", T[0]))
+    bad = T[:3].copy()
+    bad[1, :3, :3] *= 2.0
+    with pytest.raises(TaskError, match="item 1 is not a homogeneous transform"):
+        fw.solve_batch(problem, bad)
+    with pytest.raises(TaskError, match="shape"):
+        fw.solve_batch(fw.Problem(robot, fw.Position("ee", [0.3, 0, 0.3])), np.zeros((4, 2)))
+    with pytest.raises(TaskError, match="item 2 holds NaN"):
+        fw.solve_batch(fw.Problem(robot, fw.Position("ee", [0.3, 0, 0.3])), [[0, 0, 0]] * 2 + [[np.nan, 0, 0]])
+    with pytest.raises(TaskError, match="does not have"):
+        fw.solve_batch(problem, {"nope": T[:2]})
+    with pytest.raises(SolverError, match="one per item"):
+        fw.solve_batch(problem, T[:3], seed=[1, 2])
+    with pytest.raises(SolverError, match="2 configurations for 3 targets"):
+        fw.solve_batch(problem, T[:3], initial=np.tile(robot.middle, (2, 1)))
+    two = fw.Problem(robot, fw.Position("ee", [0.3, 0, 0.3]) + fw.Orientation("ee", quat_xyzw=[0, 0, 0, 1]))
+    with pytest.raises(TaskError, match="2 task terms with a target"):
+        fw.solve_batch(two, T[:2])
+    with pytest.raises(TaskError, match="one target per item"):
+        fw.solve_batch(two, {two.names[0]: T[:2, :3, 3], two.names[1]: T[:3, :3, :3]})
