@@ -1,5 +1,5 @@
 """The ``metaik`` command line: ``robots``, ``show ROBOT``, ``tasks``, ``solvers``, ``run TASK``, ``bench TASK...``,
-``replay FILE``.
+``reach ROBOT``, ``replay FILE``.
 
 Exit codes: 0 success; 1 the run finished but some case missed its tolerance; 2 bad input (missing file,
 bad TOML, unknown robot/solver/frame, invalid weights: one clear line, no traceback); 130 interrupted.
@@ -21,6 +21,7 @@ from rich.table import Table
 from .bench import add_bench_command, bench_command
 from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
 from .fabrik.taskfile import ReachTask
+from .reach_cli import add_reach_command, reach_command
 from .recording import Recorder, add_replay_command, replay_command
 from .solve import DEFAULT_SOLVER
 from .taskfile import resolve_task
@@ -53,6 +54,7 @@ def _parser() -> argparse.ArgumentParser:
     sub.add_parser("tasks", help="list the shipped task files")
     sub.add_parser("solvers", help="list the solvers with their options, defaults and references")
     add_bench_command(sub)
+    add_reach_command(sub)
     add_replay_command(sub)
     return parser
 
@@ -62,7 +64,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     console = Console()
     try:
         commands = {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks, "solvers": _solvers,
-                    "bench": bench_command, "replay": replay_command}
+                    "bench": bench_command, "reach": reach_command, "replay": replay_command}
         return commands[args.command](args, console)
     except MetaikError as err:
         Console(stderr=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False, markup=True,
