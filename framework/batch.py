@@ -80,6 +80,7 @@ def solve_batch(
     options: Mapping[str, Any] | None = None,
     workers: int | None = None,
     progress: bool | None = None,
+    scheduler: str | None = None,
 ) -> BatchResult:
     """Solve ``problem`` for every target of a batch.
 
@@ -93,8 +94,11 @@ def solve_batch(
         tolerance, angle_tolerance, max_iterations, options: as :func:`framework.solve`, per item.
         time_budget: seconds per item.
         initial: ``(B, n)`` a warm start per item (default: the problem's own start, as ``solve``).
-        workers: threads of the compiled loop (default: every core).
+        workers: threads of the compiled loop (default: every core); with ``scheduler``: a local cluster's
+            worker processes.
         progress: a progress bar (default: when stderr is a terminal).
+        scheduler: split the batch over a Dask cluster (``"tcp://HOST:PORT"`` or ``"local"``, see
+            :mod:`framework.cluster`); the result is the same.
     """
     started = time.perf_counter()
     P, B = _parameters(problem, targets)
@@ -105,6 +109,8 @@ def solve_batch(
             raise SolverError(f"initial holds {initial.shape[0]} configurations for {B} targets")
     kwargs = dict(tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
                   max_iterations=max_iterations)
+    if scheduler is not None:
+        return _on_cluster(problem, targets, solver, seeds, initial, options, kwargs, scheduler, workers, started)
     template = make_request(problem, initial=None if initial is None else initial[:1], **kwargs)
     method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
     program = problem.program
@@ -141,6 +147,36 @@ def solve_batch(
     success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
     return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,
                        time.perf_counter() - started, method.name)
+
+
+def _on_cluster(problem: Problem, targets, solver, seeds: np.ndarray, initial, options, kwargs: dict,
+                scheduler: str, workers: int | None, started: float) -> BatchResult:
+    """:func:`solve_batch` with the items split into chunks over a Dask cluster's workers."""
+    from .cluster import cluster_client, completed
+
+    columns = {name: column for name, (_, column) in _targeted(problem, targets).items()}
+    B = len(seeds)
+    with cluster_client(scheduler, workers) as client:
+        count = max(1, len(client.scheduler_info()["workers"]))
+        size = max(1, -(-B // (4 * count)))
+        chunks = [np.arange(a, min(a + size, B)) for a in range(0, B, size)]
+        parts = {k: part for k, part in completed(client, _cluster_chunk, chunks, problem, columns, solver, seeds,
+                                                    initial, options, kwargs)}
+    merged = [np.concatenate([getattr(parts[k], field) for k in range(len(chunks))])
+              for field in ("configurations", "success", "errors", "costs", "iterations", "compiled")]
+    first = parts[0] if parts else None
+    return BatchResult(merged[0], merged[1], merged[2], first.error_names if first else problem.program.task_blocks,
+                       merged[3], merged[4], merged[5], time.perf_counter() - started,
+                       first.solver if first else str(solver))
+
+
+def _cluster_chunk(items: np.ndarray, problem: Problem, columns: dict, solver, seeds: np.ndarray, initial,
+                   options, kwargs: dict) -> BatchResult:
+    """The items ``items`` of a batch, solved on a cluster worker (one thread)."""
+    part = {name: column[items] if isinstance(column, np.ndarray) else [column[i] for i in items]
+            for name, column in columns.items()}
+    return solve_batch(problem, part, solver, seed=seeds[items], initial=None if initial is None else initial[items],
+                       options=options, workers=1, progress=False, **kwargs)
 
 
 def _solve_each(problem: Problem, targets, items: np.ndarray, seeds: np.ndarray, initial, state: BatchState,

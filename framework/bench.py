@@ -604,6 +604,7 @@ def run_grid(
     progress: bool = True,
     console=None,
     stop: Callable[[], bool] | None = None,
+    scheduler: str | None = None,
 ) -> RunReport:
     """Run every run of ``grid`` not yet in ``results``, appending each record as soon as it is done.
 
@@ -615,6 +616,8 @@ def run_grid(
         chunk_size: runs per worker task (default: a few per worker and at most 16).
         progress: show a progress bar (rich) on ``console``.
         stop: polled between runs; returning True stops like Ctrl-C (the runs in flight are finished and kept).
+        scheduler: run on a Dask cluster instead (``"tcp://HOST:PORT"``, or ``"local"``: ``jobs`` worker
+            processes); this process still writes every record, as each chunk of runs comes back.
 
     Ctrl-C finishes the runs in flight, writes them and returns with ``interrupted=True``; a second Ctrl-C aborts.
     """
@@ -643,7 +646,9 @@ def run_grid(
         def should_stop() -> bool:
             return interrupt.requested or bool(stop and stop())
 
-        if jobs == 1 or len(pending) <= 1:
+        if scheduler is not None:
+            completed = _run_cluster(pending, write, should_stop, scheduler, jobs, chunk_size)
+        elif jobs == 1 or len(pending) <= 1:
             completed = _run_serial(pending, write, should_stop)
         else:
             completed = _run_parallel(pending, write, should_stop, jobs, chunk_size)
@@ -769,6 +774,35 @@ def _run_parallel(
                     sent += f.result()
     if failure is not None:
         raise failure
+    return received
+
+
+_CLUSTER_TASKS: dict[str, _TaskCache] = {}  # one task cache per cluster worker process
+
+
+def _cluster_chunk(chunk: Sequence[RunSpec]) -> list[str]:
+    """Run a chunk on a cluster worker; the records as JSON lines."""
+    cache = _CLUSTER_TASKS.setdefault("tasks", _TaskCache())
+    return [execute(spec, cache.problem(spec)).to_json() for spec in chunk]
+
+
+def _run_cluster(
+    pending: Sequence[RunSpec],
+    write: Callable[[str], None],
+    should_stop: Callable[[], bool],
+    scheduler: str,
+    jobs: int,
+    chunk_size: int | None,
+) -> int:
+    from .cluster import cluster_client, completed
+
+    received = 0
+    with cluster_client(scheduler, jobs) as client:
+        workers = max(1, len(client.scheduler_info()["workers"]))
+        for _, lines in completed(client, _cluster_chunk, _chunks(pending, workers, chunk_size), stop=should_stop):
+            for line in lines:
+                write(line)
+                received += 1
     return received
 
 
@@ -995,6 +1029,8 @@ def add_bench_command(subparsers) -> None:
     p.add_argument("--reference", help="solver compared against every other by the sign test")
     p.add_argument("--group-by", choices=GROUP_BY, help="tables and figures per case or per system")
     p.add_argument("--jobs", "-j", type=int, help="worker processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT|local",
+                   help="run on a Dask cluster (an address, or 'local': a local cluster of --jobs processes)")
     p.add_argument("--out", help="output folder (default: results/bench/<task name>, git-ignored)")
     p.add_argument("--max-runs", type=int, help="stop after this many new runs (re-run to continue)")
     p.add_argument("--report-only", action="store_true", help="do not run; report the results file")
@@ -1032,7 +1068,8 @@ def bench_command(args, console) -> int:
     if args.rerun and not args.report_only:
         console.print(f"dropped {drop_runs(results, grid.keys)} earlier runs of this grid")
     if not args.report_only:
-        report = run_grid(grid, results, jobs=args.jobs, max_runs=args.max_runs, console=console)
+        report = run_grid(grid, results, jobs=args.jobs, max_runs=args.max_runs, console=console,
+                          scheduler=args.scheduler)
         console.print(
             f"{report.completed} runs done in {report.wall_time:.1f} s, {report.skipped} already in the "
             f"results file"

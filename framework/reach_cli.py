@@ -28,6 +28,7 @@ def add_reach_command(sub: argparse._SubParsersAction) -> None:
     reach.add_argument("--step", type=float, default=0.1, help="base placement: grid step [m]")
     reach.add_argument("--headings", type=int, default=12, help="base placement: headings per position")
     reach.add_argument("--seed", type=int, default=0)
+    reach.add_argument("--scheduler", metavar="tcp://HOST:PORT|local", help="compute the map on a Dask cluster")
     reach.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -66,7 +67,7 @@ def reach_command(args, console: Console) -> int:
         return EXIT_OK
     frame = args.frame or robot.end_effectors[0]
     result = reachability_map(robot, frame, voxel=args.voxel, orientations=args.orientations, seed=args.seed,
-                              progress=progress)
+                              progress=progress, scheduler=args.scheduler)
     reached = result.fraction > 0
     console.print(f"{robot.name}, frame {frame}: {len(result.centers)} voxels of {args.voxel:g} m, "
                   f"{reached.sum()} reach something, mean fraction {result.fraction[reached].mean():.3f} there"

@@ -132,11 +132,13 @@ class ReachabilityMap:
 
 def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientations: int = 0,
                      box: tuple[Sequence[float], Sequence[float]] | None = None, seed: int = 0,
-                     workers: int | None = None, progress: bool | None = None) -> ReachabilityMap:
+                     workers: int | None = None, progress: bool | None = None,
+                     scheduler: str | None = None) -> ReachabilityMap:
     """The capability map of ``frame``: voxels of edge ``voxel`` [m] over ``box`` (``(lower, upper)`` corners
     [m, world]; default: the bounding box of 2,000 random configurations' frame positions), each tried with
     ``orientations`` random rotations (0: the position alone), solved by ``multistart_lm`` within
-    :data:`MAP_TOLERANCE` and :data:`MAP_ITERATIONS`."""
+    :data:`MAP_TOLERANCE` and :data:`MAP_ITERATIONS` (on a Dask cluster with ``scheduler``, as
+    :func:`~framework.solve_batch`)."""
     robot.frame_id(frame)
     if not (np.isfinite(voxel) and voxel > 0):
         raise TaskError(f"voxel must be a positive length [m]; got {voxel!r}")
@@ -161,7 +163,7 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
     else:
         problem, targets = Problem(robot, Position(frame, centers[0])), centers
     result = solve_batch(problem, targets, "multistart_lm", seed=seed, tolerance=MAP_TOLERANCE,
-                         max_iterations=MAP_ITERATIONS, workers=workers, progress=progress)
+                         max_iterations=MAP_ITERATIONS, workers=workers, progress=progress, scheduler=scheduler)
     reached = result.success.reshape(V, O)
     measure = np.zeros(V * O)
     if result.success.any():
