@@ -26,6 +26,7 @@ from .errors import SolverError, TaskError
 from .problem import Problem
 from .solve import DEFAULT_SOLVER, DEFAULT_TOLERANCE, make_request, solve
 from .solvers import ik_solver
+from .solvers.ik import BatchPlan
 
 
 @dataclass(frozen=True)
@@ -120,19 +121,7 @@ def solve_batch(
                              else initial)
     with _Bar(progress, B, f"batch IK ({method.name})") as bar:
         if plan is not None and program.task_rows:
-            everything = np.arange(B, dtype=np.int64)
-            descend_batch(program, P, state, everything, plan.first, time_budget=time_budget, workers=workers,
-                          progress=bar.advance_compiled)
-            stalled = everything[(state.codes == STARTS) & (state.counts[:, 0] < plan.first.max_iterations)]
-            if plan.restarts is not None and stalled.size:
-                lower, upper = problem.robot.lower, problem.robot.upper
-                draws = np.stack([lower + (upper - lower) * np.random.default_rng(int(seeds[i])).random(
-                    (RESTART_BATCH + 1, n)) for i in stalled])
-                state.X[stalled] = draws[:, 0]
-                state.counts[stalled, 2] += 1
-                descend_batch(program, P, state, stalled, plan.restarts, starts=np.ascontiguousarray(draws[:, 1:]),
-                              time_budget=time_budget, workers=workers)
-            done = (state.codes == REACHED) | (state.codes == DEADLINE)
+            done = _engine(problem, P, state, plan, seeds, time_budget, workers, bar)
         else:
             done = np.zeros(B, dtype=bool)
         bar.compiled_done(int(done.sum()))
@@ -147,6 +136,39 @@ def solve_batch(
     success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
     return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,
                        time.perf_counter() - started, method.name)
+
+
+def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan, seeds: np.ndarray,
+            time_budget: float | None, workers: int | None, bar: _Bar) -> np.ndarray:
+    """Run the plan's engine phase over every item (as :func:`~framework.engine.solve_local` runs it for one:
+    the first descent, then rounds of restarts drawn from the item's seeded generator while it stalls, the best
+    point of a miss kept); ``(B,)`` which items are finished (the others need the solver itself)."""
+    program, n = problem.program, problem.robot.n
+    everything = np.arange(len(seeds), dtype=np.int64)
+    descend_batch(program, P, state, everything, plan.first, time_budget=time_budget, workers=workers,
+                  progress=bar.advance_compiled)
+    best = BatchState(*(a.copy() for a in state))  # the best miss so far (solve_local's ``best``)
+    settings = plan.restarts
+    active = everything[(state.codes == STARTS) & (state.counts[:, 0] < plan.first.max_iterations)]
+    generators: dict[int, np.random.Generator] = {}
+    lower, upper = problem.robot.lower, problem.robot.upper
+    while settings is not None and active.size:
+        draws = np.stack([lower + (upper - lower) * generators.setdefault(
+            i, np.random.default_rng(int(seeds[i]))).random((RESTART_BATCH + 1, n)) for i in active.tolist()])
+        state.X[active] = draws[:, 0]
+        state.counts[active, 2] += 1
+        descend_batch(program, P, state, active, settings, starts=np.ascontiguousarray(draws[:, 1:]),
+                      time_budget=time_budget, workers=workers)
+        missed = active[state.codes[active] != REACHED]
+        better = missed[np.einsum("ij,ij->i", state.E[missed], state.E[missed])
+                        < np.einsum("ij,ij->i", best.E[missed], best.E[missed])]
+        for mine, kept in zip(state[:3], best[:3]):
+            kept[better] = mine[better]
+        active = missed[(state.codes[missed] == STARTS) & (state.counts[missed, 0] < settings.max_iterations)]
+    reached = state.codes == REACHED
+    for mine, kept in zip(state[:3], best[:3]):
+        mine[~reached] = kept[~reached]
+    return reached | (state.codes == DEADLINE) | (not plan.escalates)
 
 
 def _on_cluster(problem: Problem, targets, solver, seeds: np.ndarray, initial, options, kwargs: dict,

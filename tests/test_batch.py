@@ -118,3 +118,19 @@ def test_bad_batches_are_named_errors(puma):
         fw.solve_batch(two, T[:2])
     with pytest.raises(TaskError, match="one target per item"):
         fw.solve_batch(two, {two.names[0]: T[:2, :3, 3], two.names[1]: T[:3, :3, :3]})
+
+
+def test_misses_are_the_engines_best_miss_as_in_solve():
+    """Unreachable and hard targets under a small budget: multistart_lm keeps the engine's best miss over its
+    restart rounds — the batch keeps the same one, in the compiled loop (no item handed to solve)."""
+    arm = fw.load_robot("youbot_arm")
+    rng = np.random.default_rng(8)
+    points = rng.uniform([-0.8, -0.8, -0.3], [0.8, 0.8, 0.8], (40, 3))  # many out of reach
+    problem = fw.Problem(arm, fw.Position("ee", points[0]))
+    batch = fw.solve_batch(problem, points, "multistart_lm", seed=4, tolerance=1e-6, max_iterations=120)
+    assert batch.compiled.all() and 0 < batch.success.sum() < len(points)
+    for i, p in enumerate(points):
+        one = fw.solve(fw.Problem(arm, fw.Position("ee", p)), "multistart_lm", seed=4 + i, tolerance=1e-6,
+                       max_iterations=120)
+        np.testing.assert_array_equal(batch.configurations[i], one.configuration)
+        assert batch.iterations[i] == one.iterations

@@ -77,12 +77,14 @@ class Outcome(NamedTuple):
 class BatchPlan(NamedTuple):
     """How a solve begins when its beginning is the local engine alone, so :func:`framework.solve_batch` can run
     it compiled over a whole batch: the first start ``x0 (n,)``, the settings of the first descent (from ``x0``,
-    no random restart), and those of the random restarts that follow it (``None``: whatever follows the first
-    descent needs the solver itself). An item whose task is not reached that way is solved by the solver."""
+    no random restart), those of the random restarts that follow it (``None``: none follow), and whether the
+    solver goes on when the engine misses the task (``escalates``: such items are solved by the solver itself;
+    otherwise the engine's best miss is the answer)."""
 
     x0: np.ndarray
     first: LocalSettings
     restarts: LocalSettings | None
+    escalates: bool = True
 
 
 @dataclass(frozen=True)

@@ -94,7 +94,7 @@ class MultistartLM(IKSolver):
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, _ = start_configuration(problem, request, self.options.warm_start)
         settings = local_settings(request, self.options, default_iterations(request))
-        return BatchPlan(x0, settings, settings if self.options.restarts else None)
+        return BatchPlan(x0, settings, settings if self.options.restarts else None, escalates=False)
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
