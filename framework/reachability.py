@@ -242,7 +242,8 @@ def base_placements(robot: Robot, targets: Mapping[str, Sequence[float] | np.nda
         targets: frame -> target: a point ``(3,)`` [m, world] or a pose (``pinocchio.SE3`` / 4x4).
         center, radius, step: candidate positions on a square grid of spacing ``step`` within ``radius`` [m]
             of ``center`` (default: the targets' mean position).
-        headings: base headings θ tried at each position, evenly over one turn.
+        headings: base headings θ tried at each position, evenly over one turn from −π (candidates outside the
+            base coordinates' bounds are left out).
         max_iterations: Levenberg-Marquardt iterations per candidate (``multistart_lm``, tolerance 1e-4).
     """
     if not targets:
@@ -264,8 +265,13 @@ def base_placements(robot: Robot, targets: Mapping[str, Sequence[float] | np.nda
     middle = points.mean(axis=0)[:2] if center is None else np.asarray(center, dtype=float)[:2]
     offsets = np.arange(-radius, radius + 1e-12, step)
     xy = np.array([(middle[0] + a, middle[1] + b) for a in offsets for b in offsets if a * a + b * b <= radius ** 2])
-    thetas = np.arange(headings) * (2 * np.pi / headings)
-    candidates = np.array([(x, y, t) for x, y in xy for t in thetas])
+    thetas = -np.pi + np.arange(headings) * (2 * np.pi / headings)
+    candidates = np.array([(x, y, t) for x, y in xy for t in thetas]).reshape(-1, 3)
+    inside = np.all((candidates >= robot.lower[base]) & (candidates <= robot.upper[base]), axis=1)
+    candidates = candidates[inside]  # only base poses within the base's search bounds
+    if not len(candidates):
+        raise TaskError(f"no candidate base pose within {radius} m of {middle.tolist()} lies inside the base's "
+                        f"bounds {robot.lower[base].tolist()} .. {robot.upper[base].tolist()}")
     terms, columns = None, {}
     for frame, target in world.items():
         if isinstance(target, pin.SE3):
