@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .costs.base import Term
-from .engine.batch import BatchState, descend_batch
+from .engine.batch import BatchState, descend_items, in_chunks
 from .engine.local import RESTART_BATCH
 from .engine.reach import DEADLINE, REACHED, STARTS
 from .errors import SolverError, TaskError
@@ -140,35 +140,42 @@ def solve_batch(
 
 def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan, seeds: np.ndarray,
             time_budget: float | None, workers: int | None, bar: _Bar) -> np.ndarray:
-    """Run the plan's engine phase over every item (as :func:`~framework.engine.solve_local` runs it for one:
+    """Run the plan's engine phase over every item, as :func:`~framework.engine.solve_local` runs it for one:
     the first descent, then rounds of restarts drawn from the item's seeded generator while it stalls, the best
-    point of a miss kept); ``(B,)`` which items are finished (the others need the solver itself)."""
+    miss kept. Each thread takes a chunk through all of it (its Python part — the draws — overlaps the other
+    threads' compiled loops). Returns ``(B,)`` which items are finished (the others need the solver itself)."""
     program, n = problem.program, problem.robot.n
-    everything = np.arange(len(seeds), dtype=np.int64)
-    descend_batch(program, P, state, everything, plan.first, time_budget=time_budget, workers=workers,
-                  progress=bar.advance_compiled)
-    best = BatchState(*(a.copy() for a in state))  # the best miss so far (solve_local's ``best``)
-    settings = plan.restarts
-    active = everything[(state.codes == STARTS) & (state.counts[:, 0] < plan.first.max_iterations)]
-    generators: dict[int, np.random.Generator] = {}
     lower, upper = problem.robot.lower, problem.robot.upper
-    while settings is not None and active.size:
-        draws = np.stack([lower + (upper - lower) * generators.setdefault(
-            i, np.random.default_rng(int(seeds[i]))).random((RESTART_BATCH + 1, n)) for i in active.tolist()])
-        state.X[active] = draws[:, 0]
-        state.counts[active, 2] += 1
-        descend_batch(program, P, state, active, settings, starts=np.ascontiguousarray(draws[:, 1:]),
-                      time_budget=time_budget, workers=workers)
-        missed = active[state.codes[active] != REACHED]
-        better = missed[np.einsum("ij,ij->i", state.E[missed], state.E[missed])
-                        < np.einsum("ij,ij->i", best.E[missed], best.E[missed])]
-        for mine, kept in zip(state[:3], best[:3]):
-            kept[better] = mine[better]
-        active = missed[(state.codes[missed] == STARTS) & (state.counts[missed, 0] < settings.max_iterations)]
-    reached = state.codes == REACHED
-    for mine, kept in zip(state[:3], best[:3]):
-        mine[~reached] = kept[~reached]
-    return reached | (state.codes == DEADLINE) | (not plan.escalates)
+    program.refresh()
+
+    def chunk(items: np.ndarray) -> None:
+        descend_items(program, P, state, items, plan.first, time_budget=time_budget)
+        best = [a[items] for a in state[:3]]  # the best miss so far (solve_local's ``best``), rows of ``items``
+        settings, generators = plan.restarts, {}
+        row = {item: k for k, item in enumerate(items.tolist())}
+        active = items[(state.codes[items] == STARTS) & (state.counts[items, 0] < plan.first.max_iterations)]
+        while settings is not None and active.size:
+            for i in active.tolist():
+                if i not in generators:
+                    generators[i] = np.random.default_rng(int(seeds[i]))
+            draws = np.stack([lower + (upper - lower) * generators[i].random((RESTART_BATCH + 1, n))
+                              for i in active.tolist()])
+            state.X[active] = draws[:, 0]
+            state.counts[active, 2] += 1
+            descend_items(program, P, state, active, settings, starts=draws[:, 1:], time_budget=time_budget)
+            missed = active[state.codes[active] != REACHED]
+            at = np.array([row[i] for i in missed.tolist()], dtype=np.int64)
+            better = np.einsum("ij,ij->i", state.E[missed], state.E[missed]) < np.einsum("ij,ij->i", best[1][at],
+                                                                                          best[1][at])
+            for mine, kept in zip(state[:3], best):
+                kept[at[better]] = mine[missed[better]]
+            active = missed[(state.codes[missed] == STARTS) & (state.counts[missed, 0] < settings.max_iterations)]
+        missed = state.codes[items] != REACHED
+        for mine, kept in zip(state[:3], best):
+            mine[items[missed]] = kept[missed]
+
+    in_chunks(chunk, len(seeds), workers=workers, progress=bar.advance_compiled)
+    return (state.codes == REACHED) | (state.codes == DEADLINE) | (not plan.escalates)
 
 
 def _on_cluster(problem: Problem, targets, solver, seeds: np.ndarray, initial, options, kwargs: dict,

@@ -6,7 +6,7 @@ drives the task from the item's start (through its restart configurations, if it
 is reached, :func:`~.newton.regularize` minimizes the regularizers on it. The loop releases the GIL, so
 threads run chunks of a batch on all cores, each with its own copy of the program's parameters.
 
-:func:`descend_batch` is the Python side: chunks, threads, a progress callback.
+:func:`descend_items` is its Python side; :func:`in_chunks` runs work over chunks of a batch on threads.
 """
 
 from __future__ import annotations
@@ -88,40 +88,44 @@ class BatchState(NamedTuple):
                    np.zeros(B, dtype=np.int64))
 
 
-def descend_batch(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-                  *, starts: np.ndarray | None = None, time_budget: float | None = None, workers: int | None = None,
-                  progress: Callable[[int], None] | None = None) -> None:
-    """Run :func:`descend` over ``items`` in chunks of :data:`CHUNK` on ``workers`` threads (default: every core).
+def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
+                  *, starts: np.ndarray | None = None, time_budget: float | None = None) -> None:
+    """Run :func:`descend` over ``items`` in this thread, with its own copy of the program's parameters.
 
     ``starts`` ``(len(items), S, n)``: each item's restart configurations (default none); ``time_budget``: seconds
-    per item, counted from its first descent; ``progress(done)`` is called after each chunk, in this thread.
+    per item, counted from its first descent. Threads may run it at once on disjoint items.
     """
-    program.refresh()
     lower, upper, box_wrap = search_box(program)
-    n = program.robot.n
+    items = np.ascontiguousarray(items, dtype=np.int64)
     left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     if time_budget is None:
         budget = np.zeros(state.X.shape[0], dtype=np.int64)
     else:
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
-    regularize = bool(settings.regularize and program.has_regularizers)
-    workers = max(1, workers or os.cpu_count() or 1)
-    size = max(1, min(CHUNK, -(-len(items) // workers)))  # small batches still spread over every thread
-    chunks = [np.arange(a, min(a + size, len(items))) for a in range(0, len(items), size)]
+    prog = list(program.prog)
+    prog[2] = prog[2].copy()  # the items' targets are written into these parameters
+    if starts is None:
+        starts = np.zeros((len(items), 0, program.robot.n))
+    descend(items, state.X, np.ascontiguousarray(starts), P, lower, upper, box_wrap, program.kin, tuple(prog),
+            settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish,
+            bool(settings.regularize and program.has_regularizers), settings.regularize_iterations,
+            settings.smoothing, program.task_rows, state.E, state.V, state.codes, state.counts, state.spent_ns)
 
-    def run(positions: np.ndarray) -> int:
-        prog = list(program.prog)
-        prog[2] = prog[2].copy()  # each thread writes the items' targets into its own parameters
-        chunk_starts = np.zeros((len(positions), 0, n)) if starts is None else np.ascontiguousarray(starts[positions])
-        chunk_items = np.ascontiguousarray(items[positions], dtype=np.int64)
-        descend(chunk_items, state.X, chunk_starts, P, lower, upper, box_wrap, program.kin, tuple(prog),
-                settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish, regularize,
-                settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V, state.codes, state.counts,
-                state.spent_ns)
-        return len(positions)
+
+def in_chunks(work: Callable[[np.ndarray], None], count: int, *, workers: int | None = None,
+              progress: Callable[[int], None] | None = None) -> None:
+    """Call ``work(items)`` over chunks of ``range(count)`` (at most :data:`CHUNK` items, at least one chunk per
+    thread) on ``workers`` threads (default: every core); ``progress(done)`` after each chunk, in this thread."""
+    workers = max(1, workers or os.cpu_count() or 1)
+    size = max(1, min(CHUNK, -(-count // workers)))  # small batches still spread over every thread
+    chunks = [np.arange(a, min(a + size, count), dtype=np.int64) for a in range(0, count, size)]
+
+    def run(items: np.ndarray) -> int:
+        work(items)
+        return len(items)
 
     workers = min(workers, len(chunks))
-    if workers == 1:
+    if workers <= 1:
         for chunk in chunks:
             done = run(chunk)
             if progress:
