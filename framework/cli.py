@@ -21,7 +21,8 @@ from rich.table import Table
 from .bench import add_bench_command, bench_command
 from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
 from .fabrik.taskfile import ReachTask
-from .reach_cli import add_reach_command, reach_command
+from .placement_taskfile import PlacementTask
+from .reach_cli import add_reach_command, reach_command, run_placement
 from .recording import Recorder, add_replay_command, replay_command
 from .solve import DEFAULT_SOLVER
 from .taskfile import resolve_task
@@ -147,6 +148,8 @@ def _run(args, console: Console) -> int:
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
     if isinstance(task, ReachTask):  # M-FABRIK or its Jacobian baselines
         return _run_reach(args, console, task)
+    if isinstance(task, PlacementTask):  # where a mobile base should stand
+        return run_placement(args, console, task)
     settings = dict(task.solver)
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}

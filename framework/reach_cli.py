@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .errors import EXIT_OK, TaskError
@@ -46,6 +47,43 @@ def _targets(entries: list[str]) -> dict[str, np.ndarray]:
     return targets
 
 
+def _print_ranking(console: Console, placements) -> None:
+    ranking = placements.ranking
+    console.print(f"{len(placements.candidates)} base poses tried, {len(ranking)} reach every target")
+    table = Table(title="Best base poses (smallest hand manipulability, highest first)")
+    for column in ("rank", "x (m)", "y (m)", "θ (deg)", "manipulability"):
+        table.add_column(column, justify="right")
+    for rank, k in enumerate(ranking[:5], 1):
+        x, y, theta = placements.candidates[k]
+        table.add_row(str(rank), f"{x:.3f}", f"{y:.3f}", f"{np.degrees(theta):.1f}", f"{placements.score[k]:.4f}")
+    console.print(table)
+
+
+def run_placement(args, console: Console, task) -> int:
+    """``metaik run`` of a base-placement task file: rank the base poses, solve the whole robot from the best one
+    (both hands, motion minimized on the task), print it and, with ``--record``, record it."""
+    from .errors import EXIT_MISSED
+    from .reachability import base_placements, solve_from_base
+
+    console.print(f"[bold]{escape(task.name)}[/] on {escape(task.robot.name)}: {escape(task.description)}")
+    settings = {**task.settings, **({"seed": args.seed} if args.seed is not None else {})}
+    placements = base_placements(task.robot, task.targets, progress=False if args.no_progress else None,
+                                 **settings)
+    _print_ranking(console, placements)
+    if not placements.ranking.size:
+        return EXIT_MISSED
+    problem, result = solve_from_base(task.robot, task.targets, placements.best[1])
+    console.print(f"whole robot from the best base pose: success {result.success}, errors "
+                  + escape(", ".join(f"{k} {v:.1e}" for k, v in result.errors.items())))
+    if args.record:
+        from .recording import Recorder
+
+        with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
+            recorder.log_solution(result, problem=problem, name="placed")
+        console.print(f"recording written to {args.record}")
+    return EXIT_OK if result.success else EXIT_MISSED
+
+
 def reach_command(args, console: Console) -> int:
     from .loading import load_robot
     from .reachability import base_placements, reachability_map
@@ -55,15 +93,7 @@ def reach_command(args, console: Console) -> int:
     if args.place:
         placements = base_placements(robot, _targets(args.place), radius=args.radius, step=args.step,
                                      headings=args.headings, seed=args.seed, progress=progress)
-        ranking = placements.ranking
-        console.print(f"{len(placements.candidates)} base poses tried, {len(ranking)} reach every target")
-        table = Table(title="Best base poses (smallest hand manipulability, highest first)")
-        for column in ("rank", "x (m)", "y (m)", "θ (deg)", "manipulability"):
-            table.add_column(column, justify="right")
-        for rank, k in enumerate(ranking[:5], 1):
-            x, y, theta = placements.candidates[k]
-            table.add_row(str(rank), f"{x:.3f}", f"{y:.3f}", f"{np.degrees(theta):.1f}", f"{placements.score[k]:.4f}")
-        console.print(table)
+        _print_ranking(console, placements)
         return EXIT_OK
     frame = args.frame or robot.end_effectors[0]
     result = reachability_map(robot, frame, voxel=args.voxel, orientations=args.orientations, seed=args.seed,

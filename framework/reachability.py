@@ -22,7 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from .batch import solve_batch
-from .costs import Pose, Position
+from .solve import IKResult, solve
+from .costs import Motion, Pose, Position
 from .errors import ConfigurationError, TaskError
 from .loading import robot_from_urdf
 from .problem import Problem
@@ -299,3 +300,17 @@ def base_placements(robot: Robot, targets: Mapping[str, Sequence[float] | np.nda
     rest = np.setdiff1d(np.arange(robot.n), base)
     configurations[:, rest] = result.configurations
     return BasePlacements(candidates, result.success, score, configurations, base)
+
+
+def solve_from_base(robot: Robot, targets: Mapping[str, Sequence[float]], configuration: np.ndarray,
+                    *, group: str = "base", seed: int = 0) -> tuple[Problem, IKResult]:
+    """Solve the whole robot (base included) for the hand ``targets`` [m, world] from a base placement's
+    ``configuration``, its motion from there minimized on the task (the base weighted 0.1, each other group 0.4)."""
+    objective = None
+    for frame, target in targets.items():
+        term = Position(frame, target)
+        objective = term if objective is None else objective + term
+    for name in robot.groups:
+        objective = objective + (0.1 if name == group else 0.4) * Motion(name, configuration)
+    problem = Problem(robot, objective)
+    return problem, solve(problem, seed=seed, initial=configuration)

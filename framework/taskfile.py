@@ -78,6 +78,7 @@ from .trajectory import Trajectory, circle, lemniscate, line, paper000, rose, si
 
 if TYPE_CHECKING:  # pragma: no cover
     from .fabrik.taskfile import ReachTask
+    from .placement_taskfile import PlacementTask
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -216,10 +217,11 @@ def resolve_task(name: str) -> Path:
     raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
 
 
-def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | ReachTask:
+def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | ReachTask | PlacementTask:
     """Parse and validate a task file; every error names the file and the entry at fault.
 
-    A file with a ``[reach]`` table is a reach task for M-FABRIK (:class:`framework.fabrik.taskfile.ReachTask`).
+    A file with a ``[reach]`` table is a reach task for M-FABRIK (:class:`framework.fabrik.taskfile.ReachTask`);
+    one with a ``[placement]`` table a base-placement task (:class:`framework.placement_taskfile.PlacementTask`).
 
     ``points`` overrides the number of waypoints of a tracking task (parametric paths are re-sampled, paths
     from files or lists keep ``points`` evenly spaced waypoints).
@@ -233,9 +235,12 @@ def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | Reac
         raise TaskError(f"{path}: not valid TOML: {err}") from err
     try:
         from .fabrik.taskfile import is_reach_task, reach_task_from_dict
+        from .placement_taskfile import is_placement_task, placement_task_from_dict
 
         if is_reach_task(raw):  # a position-reach task for M-FABRIK and its baselines
             return reach_task_from_dict(raw, path, points=points)
+        if is_placement_task(raw):  # where a mobile base should stand
+            return placement_task_from_dict(raw, path)
         return _parse(path, raw, points=points)
     except MetaikError as err:
         if str(path) in str(err):

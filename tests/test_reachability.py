@@ -126,3 +126,26 @@ def test_reach_command(tmp_path, capsys):
     assert "reach every target" in capsys.readouterr().out
     assert main(["reach", "youbot_dual_mobile", "--place", "arm1_ee=1,0.5"]) == EXIT_INPUT
     assert "FRAME=X,Y,Z" in capsys.readouterr().err
+
+
+def test_placement_task_file_runs_and_records(tmp_path, capsys):
+    from framework.cli import EXIT_INPUT, EXIT_OK, main
+    from framework.placement_taskfile import PlacementTask
+    from framework.recording import read_recording
+    from framework.taskfile import load_task, resolve_task
+
+    task = load_task(resolve_task("youbot_dual_base_placement"))
+    assert isinstance(task, PlacementTask) and set(task.targets) == {"arm1_ee", "arm2_ee"}
+    rrd = tmp_path / "placed.rrd"
+    assert main(["run", "youbot_dual_base_placement", "--record", str(rrd), "--no-progress"]) == EXIT_OK
+    out = capsys.readouterr().out
+    assert "success True" in out and "position[arm1_ee]" in out
+    assert read_recording(rrd).count("/world/robot/skeleton", "solution") == 1
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[task]\nrobot = "youbot_dual_mobile"\n[placement]\nradius = 0.5\nstpe = 0.1\n'
+                   '[placement.targets]\narm1_ee = [1, 0.5, 0.3]\n')
+    assert main(["run", str(bad)]) == EXIT_INPUT
+    assert "unknown keys ['stpe']" in capsys.readouterr().err
+    bad.write_text('[task]\nrobot = "youbot_dual_mobile"\n[placement]\n[placement.targets]\nhand = [1, 0.5, 0.3]\n')
+    assert main(["run", str(bad)]) == EXIT_INPUT
+    assert "hand" in capsys.readouterr().err
