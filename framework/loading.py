@@ -47,6 +47,8 @@ def load_robot(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     xacro_args: Mapping[str, str] | None = None,
     unbounded_translation: float = 2.0,
+    package_dirs: Sequence[str | Path] = (),
+    trusted: bool = False,
 ) -> Robot:
     """Load a robot by index name or from a ``.urdf`` / ``.xacro`` file.
 
@@ -59,10 +61,14 @@ def load_robot(
         bounds: search bounds to override, coordinate or joint name -> (lower, upper).
         xacro_args: xacro arguments, for ``.xacro`` files.
         unbounded_translation: half-width [m] of the search box of unbounded translations (planar bases).
+        package_dirs: folders holding ROS packages, for ``$(find pkg)`` in xacro files (``ROS_PACKAGE_PATH`` and
+            ``AMENT_PREFIX_PATH`` are searched after them).
+        trusted: let xacro read environment variables and YAML files and evaluate ``$(eval)`` (robot files are
+            data by default: see :mod:`framework.xacro_files`).
     """
     path, entry = resolve_robot(source)
     name = str(source) if entry else path.name.split(".")[0]
-    text = read_robot_file(path, xacro_args=xacro_args)
+    text = read_robot_file(path, xacro_args=xacro_args, package_dirs=package_dirs, trusted=trusted)
     return robot_from_urdf(
         text,
         name=name,
@@ -91,19 +97,17 @@ def resolve_robot(source: str | Path) -> tuple[Path, Mapping]:
     )
 
 
-def read_robot_file(path: Path, *, xacro_args: Mapping[str, str] | None = None) -> str:
-    """URDF text of a ``.urdf`` file or an expanded ``.xacro`` file."""
+def read_robot_file(path: Path, *, xacro_args: Mapping[str, str] | None = None,
+                    package_dirs: Sequence[str | Path] = (), trusted: bool = False) -> str:
+    """URDF text of a ``.urdf`` file or an expanded ``.xacro`` file (see :mod:`framework.xacro_files`: robot
+    files are data unless ``trusted``; ``$(find pkg)`` resolves in ``package_dirs``)."""
     path = Path(path)
     if not path.is_file():
         raise RobotFileError(f"robot file {path} does not exist")
     if path.suffix == ".xacro":
-        import xacro
+        from .xacro_files import expand_xacro
 
-        try:
-            doc = xacro.process_file(str(path), mappings={k: str(v) for k, v in (xacro_args or {}).items()})
-        except Exception as err:  # xacro raises its own XacroException, but also NameError, KeyError, ...
-            raise RobotFileError(f"xacro failed on {path}: {err}") from err
-        return doc.toprettyxml(indent="  ")
+        return expand_xacro(path, xacro_args=xacro_args, package_dirs=package_dirs, trusted=trusted)
     if xacro_args:
         raise RobotFileError(f"xacro arguments given for {path}, which is not a .xacro file")
     try:
