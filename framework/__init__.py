@@ -6,7 +6,8 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import JointLimitPenalty, Motion, Objective, Orientation, Pose, Position, RelativePosition, Term
+from .costs import (Direction, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
+                    RelativePosition, Term)
 from .errors import (
     ConfigurationError,
     LimitsError,
@@ -34,7 +35,9 @@ __all__ = [
     "ConfigurationError",
     "Evaluation",
     "IKResult",
+    "Direction",
     "JointLimitPenalty",
+    "JointTarget",
     "Motion",
     "Objective",
     "Orientation",

@@ -163,6 +163,13 @@ class Robot:
         """Name of each search coordinate (joint name; ``joint.x``/``.y``/``.theta`` for planar joints)."""
         return tuple(name for j in self.joints for name in _coordinate_names(j))
 
+    def coordinate_is_linear(self, i: int) -> bool:
+        """Whether coordinate ``i`` is a length [m] (prismatic joints, a planar joint's x and y), not an angle."""
+        for joint in self.joints:
+            if i in joint.coordinates:
+                return joint.kind is JointKind.PRISMATIC or (joint.kind is JointKind.PLANAR and i < joint.index + 2)
+        raise ConfigurationError(f"robot {self.name!r} has no coordinate {i}")
+
     @property
     def joint_names(self) -> tuple[str, ...]:
         return tuple(j.name for j in self.joints)

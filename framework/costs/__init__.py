@@ -1,8 +1,9 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
+from .direction import Direction
 from .limits import JointLimitPenalty
-from .motion import Motion
+from .motion import JointTarget, Motion
 from .orientation import Orientation, rotation_from
 from .pose import Pose, pose_from
 from .position import Position
@@ -12,7 +13,9 @@ from .relative import RelativePosition
 __all__ = [
     "LEVELS",
     "Block",
+    "Direction",
     "JointLimitPenalty",
+    "JointTarget",
     "Motion",
     "Objective",
     "Orientation",

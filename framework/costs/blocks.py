@@ -13,7 +13,12 @@ kind            residual                                      Jacobian          
 ``RELATIVE``    ``p_b − p_a − o`` (3) [m]                     ``J_p,b − J_p,a``           ``o`` (3)
 ``COORDINATES`` ``x[idx] − x₀`` (wrapped on continuous axes)  unit rows                   ``x₀`` (count)
 ``LIMITS``      ``min(0, x − l) + max(0, x − u)`` (n)         ``±1`` outside, 0 inside    ``l`` (n), ``u`` (n)
+``AXIS``        ``Bᵀ θ/sinθ (d × R_a e)`` (2) [rad], norm = θ  see :func:`block_residual`  ``e, d, b₁, b₂`` (12)
 ==============  ============================================  ==========================  =======================
+
+``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
+``R_a e`` and ``d``, the residual the rotation vector taking ``d`` to ``R_a e`` written in a basis ``B = (b₁, b₂)``
+of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free).
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -25,7 +30,7 @@ import numba
 import numpy as np
 
 # Block kinds
-POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS = 0, 1, 2, 3, 4
+POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS = 0, 1, 2, 3, 4, 5
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -147,6 +152,8 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                 m2 = L3[a, 0] * params[p + 6] + L3[a, 1] * params[p + 7] + L3[a, 2] * params[p + 8]
                 for i in range(n):  # row a of J_l⁻¹ R_tᵀ times J_ω
                     Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]
+    elif kind == AXIS:
+        axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == COORDINATES:
         q = bint[b, IPTR]
         for c in range(rows):
@@ -167,6 +174,50 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     Jr[row + k, i] = 0.0
                 Jr[row + k, k] = 1.0 if (v < lo or v > hi) else 0.0
     return rows
+
+
+@numba.njit(cache=True)
+def axis_world(out, fa, params, p):
+    """``w = R_a e`` (3,) and ``d`` (3,) of an ``AXIS`` block."""
+    w0 = out[fa, 0] * params[p] + out[fa, 1] * params[p + 1] + out[fa, 2] * params[p + 2]
+    w1 = out[fa, 3] * params[p] + out[fa, 4] * params[p + 1] + out[fa, 5] * params[p + 2]
+    w2 = out[fa, 6] * params[p] + out[fa, 7] * params[p + 1] + out[fa, 8] * params[p + 2]
+    return w0, w1, w2, params[p + 3], params[p + 4], params[p + 5]
+
+
+@numba.njit(cache=True)
+def axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
+    """The ``AXIS`` residual ``r = Bᵀ v``, ``v = f(θ) (d × w)``, ``f = θ/sinθ`` (so ``‖r‖ = θ``), and its Jacobian
+    ``dv = f (d × dw) − g (d·dw)(d × w)`` with ``dw = ω_i × w``, ``g = f'/sinθ = (sinθ − θcosθ)/sin³θ`` (series
+    below 1e-3 rad). Exactly opposite (θ = π, no rotation axis), ``r = (π, 0)`` and the Jacobian uses ``f = 1``."""
+    w0, w1, w2, d0, d1, d2 = axis_world(out, fa, params, p)
+    c0, c1, c2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0
+    s = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    co = d0 * w0 + d1 * w1 + d2 * w2
+    theta = np.arctan2(s, co)
+    opposite = s < 1e-12 and co < 0.0
+    if opposite:
+        f, g = 1.0, 0.0
+        r[row], r[row + 1] = np.pi, 0.0
+    else:
+        if s < 1e-3 and co > 0.0:  # θ < 1e-3: the series of θ/sinθ and (sinθ − θcosθ)/sin³θ
+            t2 = theta * theta
+            f, g = 1.0 + t2 / 6.0 + 7.0 * t2 * t2 / 360.0, 1.0 / 3.0 + 2.0 * t2 / 15.0
+        else:
+            f, g = theta / s, (s - theta * co) / (s * s * s)
+        r[row] = f * (params[p + 6] * c0 + params[p + 7] * c1 + params[p + 8] * c2)
+        r[row + 1] = f * (params[p + 9] * c0 + params[p + 10] * c1 + params[p + 11] * c2)
+    if not want_jacobian:
+        return
+    for i in range(n):
+        o0, o1, o2 = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+        e0, e1, e2 = o1 * w2 - o2 * w1, o2 * w0 - o0 * w2, o0 * w1 - o1 * w0  # dw = ω × w
+        dd = d0 * e0 + d1 * e1 + d2 * e2
+        u0 = f * (d1 * e2 - d2 * e1) - g * dd * c0
+        u1 = f * (d2 * e0 - d0 * e2) - g * dd * c1
+        u2 = f * (d0 * e1 - d1 * e0) - g * dd * c2
+        Jr[row, i] = params[p + 6] * u0 + params[p + 7] * u1 + params[p + 8] * u2
+        Jr[row + 1, i] = params[p + 9] * u0 + params[p + 10] * u1 + params[p + 11] * u2
 
 
 @numba.njit(cache=True)
@@ -273,6 +324,28 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
                 h = 0.5 * (m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx))
                 H[i, j] += h
                 H[j, i] += h
+        return
+    if kind == AXIS:  # Σ μ·∇²r = m·∂²w, m = (Bμ) × d, ∂²w/∂x_i∂x_j = ω_i × (ω_j × w) for i before j
+        p, fa = bint[b, PPTR], bint[b, FA]
+        w0, w1, w2, d0, d1, d2 = axis_world(out, fa, params, p)
+        a0 = mu[0] * params[p + 6] + mu[1] * params[p + 9]
+        a1 = mu[0] * params[p + 7] + mu[1] * params[p + 10]
+        a2 = mu[0] * params[p + 8] + mu[1] * params[p + 11]
+        m0, m1, m2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0
+        lo, hi = chain_ptr[fa], chain_ptr[fa + 1]
+        for s in range(lo, hi):
+            i = chain_idx[s]
+            wx, wy, wz = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+            if wx == 0.0 and wy == 0.0 and wz == 0.0:
+                continue
+            for t in range(s, hi):
+                j = chain_idx[t]
+                vx, vy, vz = Jf[fa, 3, j], Jf[fa, 4, j], Jf[fa, 5, j]
+                q0, q1, q2 = vy * w2 - vz * w1, vz * w0 - vx * w2, vx * w1 - vy * w0  # ω_j × w
+                h = (m0 * (wy * q2 - wz * q1) + m1 * (wz * q0 - wx * q2) + m2 * (wx * q1 - wy * q0))
+                H[i, j] += h
+                if j != i:
+                    H[j, i] += h
         return
     frames = (bint[b, FA], bint[b, FB]) if kind == RELATIVE else (bint[b, FA], -1)
     for which in range(2):

@@ -67,3 +67,22 @@ class Motion(Term):
         if self.norm == "l2":
             return (coordinates_block(idx, self.previous_values(robot), B.NORM),)
         return (coordinates_block(idx, self.previous_values(robot), B.L1, 1.0 / (len(idx) * np.pi)),)
+
+
+class JointTarget(Motion):
+    """Joint values held at targets, as a task (a posture to reach, e.g. a wrist angle or a folded arm):
+    ``‖x_g − x_g*‖₂`` for a group or joint ``g``; ``target`` is the whole configuration ``(n,)`` or the group's
+    ``(n_g,)``. Reached first like every task term; its error is held to the angular tolerance [rad], or to the
+    linear one [m] when the group holds a translation (prismatic or planar coordinates).
+    """
+
+    level = "task"
+
+    def __init__(self, group: str, target: Sequence[float], *, name: str | None = None):
+        super().__init__(group, target, norm="l2", name=name or f"joints[{group}]")
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        idx = self.indices(robot)
+        linear = any(robot.coordinate_is_linear(i) for i in idx)
+        block = coordinates_block(idx, self.previous_values(robot), B.NORM)
+        return (block._replace(tolerance=B.TOL_LINEAR if linear else B.TOL_ANGULAR),)

@@ -1,0 +1,68 @@
+"""Direction of a frame axis: a tool pointing along a world direction, free to turn about it."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import TaskError
+from ..robot import Robot
+from . import blocks as B
+from .base import Term
+from .program import Block
+
+
+def unit_vector(value: Sequence[float], what: str) -> np.ndarray:
+    """``value`` as a unit vector (3,); raises :class:`TaskError` for a wrong shape, NaN / inf or zero length."""
+    try:
+        v = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TaskError(f"{what} must be 3 numbers") from None
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise TaskError(f"{what} must be 3 finite numbers; got {value!r}")
+    norm = np.linalg.norm(v)
+    if norm < 1e-12:
+        raise TaskError(f"{what} must not be the zero vector")
+    return v / norm
+
+
+def perpendicular_basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors ``(b1, b2)`` with ``(b1, b2, d)`` right-handed and orthonormal."""
+    helper = np.eye(3)[int(np.argmin(np.abs(d)))]
+    b1 = helper - (helper @ d) * d
+    b1 /= np.linalg.norm(b1)
+    return b1, np.cross(d, b1)
+
+
+class Direction(Term):
+    """The frame's ``axis`` (frame coordinates, default its z axis) along the world ``direction``: the angle
+    θ [rad] between them, whatever the rotation about the direction ("point the gripper forward").
+
+    Residual (2,): the rotation vector taking ``direction`` to the axis, in the plane perpendicular to
+    ``direction`` (``‖r‖ = θ``); value θ; a task term held to the angular tolerance.
+    """
+
+    level = "task"
+    has_target = True
+
+    def __init__(self, frame: str, direction: Sequence[float], *, axis: Sequence[float] = (0.0, 0.0, 1.0),
+                 name: str | None = None):
+        self.frame = frame
+        self.frames = (frame,)
+        self.axis = unit_vector(axis, f"axis of direction term on {frame!r}")
+        self.name = name or f"direction[{frame}]"
+        self.set_target(direction)
+
+    def set_target(self, direction: Sequence[float]) -> None:
+        """Move the target direction (3,) [world]; it is normalized."""
+        self.direction = unit_vector(direction, f"target direction of {self.frame!r}")
+        self._touch()
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        b1, b2 = perpendicular_basis(self.direction)
+        params = np.concatenate([self.axis, self.direction, b1, b2])
+        return (Block(B.AXIS, B.NORM, 2, self.frames, params, tolerance=B.TOL_ANGULAR),)
+
+    def __repr__(self) -> str:
+        return f"Direction({self.frame!r}, {np.round(self.direction, 6).tolist()}, axis={self.axis.tolist()})"

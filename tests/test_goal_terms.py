@@ -1,0 +1,122 @@
+"""Goal terms beyond positions and orientations — Direction (an axis along a direction) and JointTarget (a
+posture) — against Pinocchio, finite differences and the solver's strict success."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.costs import Program
+from framework.engine import residuals
+from framework.errors import TaskError
+
+from tests.test_costs import _curvature
+
+
+@pytest.fixture(scope="module")
+def robot() -> fw.Robot:
+    return fw.load_robot("youbot_dual_mobile")  # planar base (x, y, θ) + two 5R arms
+
+
+def _angle(robot, x, frame, axis, direction) -> float:
+    """The angle between the frame's axis and the direction, by Pinocchio FK."""
+    w = robot.frame_placement(x, frame).rotation @ (axis / np.linalg.norm(axis))
+    d = np.asarray(direction) / np.linalg.norm(direction)
+    return float(np.arctan2(np.linalg.norm(np.cross(w, d)), w @ d))  # accurate at every angle (arccos is not)
+
+
+def test_direction_residual_norm_is_the_angle_and_its_jacobian_matches_differences(robot, rng):
+    h = 1e-7
+    for axis in ([0, 0, 1], [1, 1, 0]):
+        term = fw.Direction("arm2_ee", [0.3, -1.0, 0.2], axis=axis)
+        program = Program(robot, 1.0 * term)
+        for x in robot.random_configurations(rng, 4):
+            r, J = residuals(program, x)
+            assert np.linalg.norm(r) == pytest.approx(_angle(robot, x, "arm2_ee", np.array(axis, float),
+                                                            term.direction), abs=1e-12)
+            fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                                  for e in np.eye(robot.n) * h])
+            np.testing.assert_allclose(J, fd, atol=2e-6)
+            assert fw.Problem(robot, term).values(x[None])[0, 0] == pytest.approx(np.linalg.norm(r), abs=1e-14)
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 1e-4, 2e-3, 1.0, 3.0, np.pi - 1e-7])
+def test_direction_at_small_and_large_angles(robot, angle):
+    """Series branch (< 1e-3 rad), general branch and near the opposite direction: ‖r‖ = θ."""
+    x = robot.middle
+    w = robot.frame_placement(x, "arm1_ee").rotation[:, 2]
+    side = np.cross(w, [0.3, 0.5, 0.8])
+    side /= np.linalg.norm(side)
+    direction = np.cos(angle) * w + np.sin(angle) * side
+    r, _ = residuals(Program(robot, 1.0 * fw.Direction("arm1_ee", direction)), x)
+    assert np.linalg.norm(r) == pytest.approx(angle, abs=1e-9)
+
+
+def test_direction_curvature_on_target(robot, rng):
+    """Σ μ·∇²r (second-order kinematics) against differences of Jᵀμ where the axis is on its direction."""
+    h = 1e-6
+    for x in robot.random_configurations(rng, 3):
+        w = robot.frame_placement(x, "arm2_ee").rotation @ np.array([1.0, 0.0, 0.0])
+        program = Program(robot, 1.0 * fw.Direction("arm2_ee", w, axis=[1, 0, 0]))
+        mu = rng.standard_normal(2)
+        fd = np.column_stack([(residuals(program, x + e)[1].T @ mu - residuals(program, x - e)[1].T @ mu) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(_curvature(program, x, mu), fd, atol=1e-6)
+
+
+def test_direction_leaves_the_rotation_about_the_axis_free():
+    """Pointing the tool only: from the solution of the full orientation (which also points it), the motion
+    minimized on the direction alone is lower — the rotation about the axis is free — and the axis is on its
+    direction to 1e-9 rad by Pinocchio."""
+    arm = fw.load_robot("puma560")
+    rng = np.random.default_rng(2)
+    gains = []
+    for q in arm.random_configurations(rng, 5):
+        M = arm.frame_placement(q, "ee")
+        motion = 0.1 * fw.Motion("all", arm.middle)
+        oriented = fw.solve(fw.Problem(arm, fw.Orientation("ee", M.rotation) + motion), tolerance=1e-9)
+        assert oriented.success
+        pointed = fw.solve(fw.Problem(arm, fw.Direction("ee", M.rotation[:, 2]) + motion), tolerance=1e-9,
+                           initial=oriented.configuration)
+        assert pointed.success
+        assert _angle(arm, pointed.configuration, "ee", np.array([0.0, 0, 1]), M.rotation[:, 2]) <= 1e-9
+        gains.append(oriented.terms["motion[all]"] - pointed.terms["motion[all]"])
+    assert min(gains) >= -1e-12 and max(gains) > 1e-3
+
+
+def test_joint_target_is_a_task_reached_first(robot):
+    arm1 = robot.group("arm1")
+    posture = robot.middle.copy()
+    posture[arm1] = [0.3, 1.0, -0.8, 1.2, 0.5]
+    problem = fw.Problem(robot, fw.JointTarget("arm1", posture) + fw.Position("arm2_ee", [0.4, 0.3, 0.3])
+                         + 0.1 * fw.Motion("all", robot.middle))
+    result = fw.solve(problem, tolerance=1e-10)
+    assert result.success
+    np.testing.assert_allclose(result.configuration[arm1], posture[arm1], atol=1e-10)
+    assert set(result.errors) == {"joints[arm1]", "position[arm2_ee]"}
+    assert problem.program.task_angular == (True, False)  # revolute joints: the angular tolerance
+    base = fw.JointTarget("base", [0.1, 0.2, 0.3])
+    assert fw.Problem(robot, base).program.task_angular == (False,)  # x, y in metres: the linear one
+    assert [robot.coordinate_is_linear(i) for i in robot.group("base")] == [True, True, False]
+
+
+@pytest.mark.parametrize("direction", [[0, 0, 0], [np.nan, 0, 1], [1, 0], "up"])
+def test_bad_directions(direction):
+    with pytest.raises(TaskError, match="direction"):
+        fw.Direction("ee", direction)
+
+
+def test_direction_matches_pinocchio_orientation_error_on_a_real_arm(erd, rng):
+    """UR5 from example-robot-data: the residual norm equals the angle from Pinocchio's log3 of the minimal
+    rotation between the tool axis and the direction."""
+    arm = fw.load_robot(erd / "ur_description" / "urdf" / "ur5_robot.urdf")
+    d = np.array([0.2, 0.9, -0.4]) / np.linalg.norm([0.2, 0.9, -0.4])
+    program = Program(arm, 1.0 * fw.Direction("tool0", d, axis=[0, 0, 1]))
+    for x in arm.random_configurations(rng, 5):
+        w = arm.frame_placement(x, "tool0").rotation[:, 2]
+        axis = np.cross(d, w)
+        R = pin.exp3(np.arctan2(np.linalg.norm(axis), d @ w) * axis / np.linalg.norm(axis))  # d → w
+        np.testing.assert_allclose(R @ d, w, atol=1e-12)
+        assert np.linalg.norm(residuals(program, x)[0]) == pytest.approx(np.linalg.norm(pin.log3(R)), abs=1e-12)
