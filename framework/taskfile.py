@@ -16,7 +16,8 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | motion | relative_position | joint_limits
+    type = "position"                     # position | orientation | direction | joint_target | motion |
+                                          # relative_position | joint_limits
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -68,7 +69,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
+from .costs import (Direction, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
+                    RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
@@ -120,6 +122,8 @@ TERM_KEYS = {
     "orientation": {"frame", "target"},
     "motion": {"group", "previous", "norm"},
     "relative_position": {"frame_a", "frame_b", "offset"},
+    "direction": {"frame", "direction", "axis"},
+    "joint_target": {"group", "target"},
     "joint_limits": set(),
 }
 
@@ -343,6 +347,11 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
                 term = Orientation(spec["frame"], value("target"), name=name)
             elif kind == "relative_position":
                 term = RelativePosition(spec["frame_a"], spec["frame_b"], value("offset"), name=name)
+            elif kind == "direction":
+                term = Direction(spec["frame"], value("direction"), axis=value("axis") if "axis" in spec else
+                                 (0.0, 0.0, 1.0), name=name)
+            elif kind == "joint_target":
+                term = JointTarget(spec["group"], value("target"), name=name)
             elif kind == "motion":
                 prev = value("previous") if "previous" in spec else previous
                 term = Motion(spec["group"], prev, norm=spec.get("norm", "l2"), name=name)

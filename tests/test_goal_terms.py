@@ -120,3 +120,36 @@ def test_direction_matches_pinocchio_orientation_error_on_a_real_arm(erd, rng):
         R = pin.exp3(np.arctan2(np.linalg.norm(axis), d @ w) * axis / np.linalg.norm(axis))  # d → w
         np.testing.assert_allclose(R @ d, w, atol=1e-12)
         assert np.linalg.norm(residuals(program, x)[0]) == pytest.approx(np.linalg.norm(pin.log3(R)), abs=1e-12)
+
+
+def test_new_terms_in_a_task_file(tmp_path):
+    from framework.taskfile import load_task
+
+    path = tmp_path / "point.toml"
+    path.write_text("""
+[task]
+name = "point the tool"
+robot = "puma560"
+[[terms]]
+type = "direction"
+frame = "ee"
+direction = "d"
+axis = [0, 0, 1]
+[[terms]]
+type = "joint_target"
+group = "joint6"
+target = [0.5]
+[[terms]]
+type = "motion"
+group = "arm"
+weight = 0.1
+[[cases]]
+name = "down"
+d = [0, 0, -1]
+""")
+    case = load_task(path).cases[0]
+    result = fw.solve(case.problem, tolerance=1e-9)
+    assert result.success and set(result.errors) == {"direction[ee]", "joints[joint6]"}
+    robot = case.problem.robot
+    assert _angle(robot, result.configuration, "ee", np.array([0, 0, 1.0]), [0, 0, -1]) <= 1e-9
+    assert result.configuration[robot.group("joint6")][0] == pytest.approx(0.5, abs=1e-9)
