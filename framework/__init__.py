@@ -6,7 +6,7 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (Direction, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
+from .costs import (Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
                     RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -36,6 +36,7 @@ __all__ = [
     "Evaluation",
     "IKResult",
     "Direction",
+    "Distance",
     "JointLimitPenalty",
     "JointTarget",
     "Motion",

@@ -16,8 +16,8 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | direction | joint_target | motion |
-                                          # relative_position | joint_limits
+    type = "position"                     # position | orientation | direction | joint_target | distance |
+                                          # motion | relative_position | joint_limits
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import (Direction, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
+from .costs import (Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
                     RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
@@ -124,6 +124,7 @@ TERM_KEYS = {
     "relative_position": {"frame_a", "frame_b", "offset"},
     "direction": {"frame", "direction", "axis"},
     "joint_target": {"group", "target"},
+    "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
     "joint_limits": set(),
 }
 
@@ -352,6 +353,12 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
                                  (0.0, 0.0, 1.0), name=name)
             elif kind == "joint_target":
                 term = JointTarget(spec["group"], value("target"), name=name)
+            elif kind == "distance":
+                if ("to_frame" in spec) == ("to_point" in spec):
+                    raise TaskError(f"{where} (distance) needs exactly one of to_frame and to_point")
+                bounds = {k: float(value(k)) for k in ("at_least", "at_most", "exactly") if k in spec}
+                term = Distance(spec["frame"], spec["to_frame"] if "to_frame" in spec else value("to_point"),
+                                name=name, **bounds)
             elif kind == "motion":
                 prev = value("previous") if "previous" in spec else previous
                 term = Motion(spec["group"], prev, norm=spec.get("norm", "l2"), name=name)

@@ -140,6 +140,11 @@ type = "joint_target"
 group = "joint6"
 target = [0.5]
 [[terms]]
+type = "distance"
+frame = "ee"
+to_point = [0, 0, 0]
+at_least = 0.3
+[[terms]]
 type = "motion"
 group = "arm"
 weight = 0.1
@@ -149,7 +154,61 @@ d = [0, 0, -1]
 """)
     case = load_task(path).cases[0]
     result = fw.solve(case.problem, tolerance=1e-9)
-    assert result.success and set(result.errors) == {"direction[ee]", "joints[joint6]"}
+    assert result.success and set(result.errors) == {"direction[ee]", "joints[joint6]", "distance[ee, point]"}
+    assert _fk_distance(case.problem.robot, result.configuration, "ee", [0, 0, 0]) >= 0.3 - 1e-9
     robot = case.problem.robot
     assert _angle(robot, result.configuration, "ee", np.array([0, 0, 1.0]), [0, 0, -1]) <= 1e-9
     assert result.configuration[robot.group("joint6")][0] == pytest.approx(0.5, abs=1e-9)
+
+
+def _fk_distance(robot, x, a, b) -> float:
+    pa = robot.frame_placement(x, a).translation
+    pb = robot.frame_placement(x, b).translation if isinstance(b, str) else np.asarray(b)
+    return float(np.linalg.norm(pa - pb))
+
+
+@pytest.mark.parametrize("make", [
+    lambda: fw.Distance("arm1_ee", "arm2_ee", exactly=0.3),
+    lambda: fw.Distance("arm1_ee", [0.3, 0.1, 0.4], at_most=0.2),
+    lambda: fw.Distance("arm2_ee", [0.3, 0.1, 0.4], at_least=2.0),
+], ids=["frames exactly", "point at most", "point at least"])
+def test_distance_residual_jacobian_and_curvature(robot, rng, make):
+    term = make()
+    lo, hi = term.bounds
+    program = Program(robot, 1.0 * term)
+    h = 1e-6
+    for x in robot.random_configurations(rng, 4):
+        r, J = residuals(program, x)
+        d = _fk_distance(robot, x, term.frame, term.to_frame or term.point)
+        assert r[0] == pytest.approx(d - hi if d > hi else (d - lo if d < lo else 0.0), abs=1e-12)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(J, fd, atol=2e-6)
+        mu = rng.standard_normal(1)  # the distance's second order is exact wherever the hinge is active
+        fdH = np.column_stack([(residuals(program, x + e)[1].T @ mu - residuals(program, x - e)[1].T @ mu) / (2 * h)
+                               for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(_curvature(program, x, mu), fdH, atol=2e-6)
+
+
+def test_distance_inside_its_band_costs_nothing_and_two_hands_keep_apart(robot):
+    x = robot.middle
+    d = _fk_distance(robot, x, "arm1_ee", "arm2_ee")
+    program = Program(robot, 1.0 * fw.Distance("arm1_ee", "arm2_ee", at_least=d - 0.01, at_most=d + 0.01))
+    r, J = residuals(program, x)
+    assert r[0] == 0.0 and not J.any()
+    problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, -0.2, 0.45]) + fw.Distance("arm1_ee", "arm2_ee",
+                         exactly=0.3) + 0.1 * fw.Motion("all", robot.middle))
+    result = fw.solve(problem, tolerance=1e-10)
+    assert result.success
+    assert _fk_distance(robot, result.configuration, "arm1_ee", "arm2_ee") == pytest.approx(0.3, abs=1e-10)
+
+
+def test_bad_distances():
+    with pytest.raises(TaskError, match="needs at_least"):
+        fw.Distance("ee", [0, 0, 0])
+    with pytest.raises(TaskError, match="0 <= at_least <= at_most"):
+        fw.Distance("ee", [0, 0, 0], at_least=0.5, at_most=0.2)
+    with pytest.raises(TaskError, match="exactly= alone"):
+        fw.Distance("ee", [0, 0, 0], exactly=0.5, at_most=0.6)
+    with pytest.raises(TaskError, match="no point to move"):
+        fw.Distance("a", "b", exactly=0.1).set_target([0, 0, 0])

@@ -2,6 +2,7 @@
 
 from .base import LEVELS, Objective, Term, check_weight
 from .direction import Direction
+from .distance import Distance
 from .limits import JointLimitPenalty
 from .motion import JointTarget, Motion
 from .orientation import Orientation, rotation_from
@@ -14,6 +15,7 @@ __all__ = [
     "LEVELS",
     "Block",
     "Direction",
+    "Distance",
     "JointLimitPenalty",
     "JointTarget",
     "Motion",

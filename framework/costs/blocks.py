@@ -14,11 +14,13 @@ kind            residual                                      Jacobian          
 ``COORDINATES`` ``x[idx] − x₀`` (wrapped on continuous axes)  unit rows                   ``x₀`` (count)
 ``LIMITS``      ``min(0, x − l) + max(0, x − u)`` (n)         ``±1`` outside, 0 inside    ``l`` (n), ``u`` (n)
 ``AXIS``        ``Bᵀ θ/sinθ (d × R_a e)`` (2) [rad], norm = θ  see :func:`block_residual`  ``e, d, b₁, b₂`` (12)
+``DISTANCE``    ``‖v‖ − hi`` above, ``‖v‖ − lo`` below, else 0 ``uᵀ ∂v`` outside the band   ``point, lo, hi`` (5)
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
 ``R_a e`` and ``d``, the residual the rotation vector taking ``d`` to ``R_a e`` written in a basis ``B = (b₁, b₂)``
-of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free).
+of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free). ``DISTANCE``: ``v = p_a − p_b``
+(frame ``b``) or ``p_a −`` a point (no frame ``b``), held within ``[lo, hi]`` (one row, a hinge on each side).
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -30,7 +32,7 @@ import numba
 import numpy as np
 
 # Block kinds
-POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS = 0, 1, 2, 3, 4, 5
+POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE = 0, 1, 2, 3, 4, 5, 6
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -154,6 +156,18 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]
     elif kind == AXIS:
         axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == DISTANCE:
+        u, dist = distance_direction(out, fa, fb, params, p)
+        lo, hi = params[p + 3], params[p + 4]
+        r[row] = dist - hi if dist > hi else (dist - lo if dist < lo else 0.0)
+        if want_jacobian:
+            active = r[row] != 0.0 and dist > 0.0
+            for i in range(n):
+                g = 0.0
+                if active:
+                    for c in range(3):
+                        g += u[c] * (Jf[fa, c, i] - (Jf[fb, c, i] if fb >= 0 else 0.0))
+                Jr[row, i] = g
     elif kind == COORDINATES:
         q = bint[b, IPTR]
         for c in range(rows):
@@ -174,6 +188,19 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     Jr[row + k, i] = 0.0
                 Jr[row + k, k] = 1.0 if (v < lo or v > hi) else 0.0
     return rows
+
+
+@numba.njit(cache=True)
+def distance_direction(out, fa, fb, params, p):
+    """``(u, ‖v‖)`` of a ``DISTANCE`` block: ``v = p_a − p_b`` (or ``p_a −`` its point when ``fb < 0``), ``u = v/‖v‖``
+    (zero when ``v = 0``)."""
+    u = np.empty(3)
+    for c in range(3):
+        u[c] = out[fa, 9 + c] - (out[fb, 9 + c] if fb >= 0 else params[p + c])
+    dist = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    for c in range(3):
+        u[c] = u[c] / dist if dist > 0.0 else 0.0
+    return u, dist
 
 
 @numba.njit(cache=True)
@@ -347,23 +374,49 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
                 if j != i:
                     H[j, i] += h
         return
+    if kind == DISTANCE:  # r = ‖v‖ − bound when outside the band: μ[Dᵀ(I − uuᵀ)D/‖v‖ + Σ u_c ∇²v_c], D = ∂v
+        p, fa, fb = bint[b, PPTR], bint[b, FA], bint[b, FB]
+        u, dist = distance_direction(out, fa, fb, params, p)
+        if dist <= 0.0 or r[row] == 0.0:
+            return
+        _position_curvature(fa, mu[0] * u[0], mu[0] * u[1], mu[0] * u[2], Jf, chain_ptr, chain_idx, H)
+        if fb >= 0:
+            _position_curvature(fb, -mu[0] * u[0], -mu[0] * u[1], -mu[0] * u[2], Jf, chain_ptr, chain_idx, H)
+        n = H.shape[0]
+        D = np.zeros((3, n))
+        for c in range(3):
+            for i in range(n):
+                D[c, i] = Jf[fa, c, i] - (Jf[fb, c, i] if fb >= 0 else 0.0)
+        uD = np.zeros(n)
+        for i in range(n):
+            uD[i] = u[0] * D[0, i] + u[1] * D[1, i] + u[2] * D[2, i]
+        k = mu[0] / dist
+        for i in range(n):
+            for j in range(n):
+                H[i, j] += k * (D[0, i] * D[0, j] + D[1, i] * D[1, j] + D[2, i] * D[2, j] - uD[i] * uD[j])
+        return
     frames = (bint[b, FA], bint[b, FB]) if kind == RELATIVE else (bint[b, FA], -1)
     for which in range(2):
         f = frames[which]
         if f < 0:
             continue
         sign = -1.0 if (kind == RELATIVE and which == 0) else 1.0
-        m0, m1, m2 = sign * mu[0], sign * mu[1], sign * mu[2]
-        lo, hi = chain_ptr[f], chain_ptr[f + 1]
-        for s in range(lo, hi):
-            i = chain_idx[s]
-            wx, wy, wz = Jf[f, 3, i], Jf[f, 4, i], Jf[f, 5, i]
-            if wx == 0.0 and wy == 0.0 and wz == 0.0:
-                continue
-            for t in range(s, hi):
-                j = chain_idx[t]
-                vx, vy, vz = Jf[f, 0, j], Jf[f, 1, j], Jf[f, 2, j]
-                h = m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx)
-                H[i, j] += h
-                if j != i:
-                    H[j, i] += h
+        _position_curvature(f, sign * mu[0], sign * mu[1], sign * mu[2], Jf, chain_ptr, chain_idx, H)
+
+
+@numba.njit(cache=True)
+def _position_curvature(f, m0, m1, m2, Jf, chain_ptr, chain_idx, H) -> None:
+    """Add ``m·∂²p_f/∂x_i∂x_j`` (``∂²p/∂x_i∂x_j = ω_i × J_j`` for ``i`` before ``j``) to ``H``."""
+    lo, hi = chain_ptr[f], chain_ptr[f + 1]
+    for s in range(lo, hi):
+        i = chain_idx[s]
+        wx, wy, wz = Jf[f, 3, i], Jf[f, 4, i], Jf[f, 5, i]
+        if wx == 0.0 and wy == 0.0 and wz == 0.0:
+            continue
+        for t in range(s, hi):
+            j = chain_idx[t]
+            vx, vy, vz = Jf[f, 0, j], Jf[f, 1, j], Jf[f, 2, j]
+            h = m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx)
+            H[i, j] += h
+            if j != i:
+                H[j, i] += h
