@@ -4,6 +4,7 @@ One :class:`Recorder` writes one file per run and flushes after every logged sol
 still leaves a readable file of what it solved. What a recording holds (entity paths, timelines)::
 
     world/robot/skeleton            links as line segments between frame origins    timeline solution / waypoint
+    world/robot/configuration       joint values (and, static, the coordinate names) timeline solution / waypoint
     world/robot/joints              joint origins (points)
     world/robot/frames/<frame>      end-effector axes (Transform3D + TransformAxes3D)
     world/robot/visuals/<k>_<link>  the URDF's meshes and primitives (static), posed by a Transform3D
@@ -184,6 +185,8 @@ class Recorder:
     def _log_robot(self, description: str | None) -> None:
         rr, stream, robot = self._rr, self.stream, self.robot
         stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        stream.log("world/robot/configuration", rr.AnyValues(coordinate_names=list(robot.coordinate_names)),
+                   static=True)
         for k, visual in enumerate(self.drawing.visuals):
             entity = f"world/robot/visuals/{k}_{entity_name(visual.link)}"
             color = _rgb255(visual.rgba)
@@ -235,14 +238,16 @@ class Recorder:
         self.stream.flush()
 
     # ------------------------------------------------------------------ poses
-    def _log_poses(self, M: np.ndarray, timeline: str, times: Sequence[int]) -> None:
-        """The robot posed at every configuration of ``M`` (:meth:`RobotDrawing.world_frames`) at ``times``."""
+    def _log_poses(self, M: np.ndarray, timeline: str, times: Sequence[int], X: np.ndarray) -> None:
+        """The robot posed at every configuration of ``X`` ``(K, n)`` (``M``: their
+        :meth:`RobotDrawing.world_frames`) at ``times``, and the joint values themselves."""
         rr, stream, drawing = self._rr, self.stream, self.drawing
         segments, joints = drawing.segments(M), drawing.joint_origins(M)
         frames, visuals = drawing.frame_placements(M), drawing.visual_placements(M)
         axis_length = 0.25 * _reach(segments[0]) if segments.shape[1] else 0.1
         for k, t in enumerate(times):
             stream.set_time(timeline, sequence=int(t))
+            stream.log("world/robot/configuration", rr.AnyValues(joint_values=np.asarray(X[k], dtype=float)))
             stream.log(
                 "world/robot/skeleton", rr.LineStrips3D(segments[k], colors=[LINK_COLOR], radii=[0.008])
             )
@@ -304,7 +309,7 @@ class Recorder:
         index = self._count
         x = np.asarray(result.configuration, dtype=float)
         stream.reset_time()
-        self._log_poses(self.drawing.world_frames(x), "solution", [index])
+        self._log_poses(self.drawing.world_frames(x), "solution", [index], x[None])
         labels, points = _targets(self.robot, x, problem, targets)
         stream.set_time("solution", sequence=index)
         stream.log(
@@ -424,7 +429,7 @@ class Recorder:
                     ),
                 )
         stream.reset_time()
-        self._log_poses(M, "waypoint", range(first, first + K))
+        self._log_poses(M, "waypoint", range(first, first + K), Q)
         stream.reset_time()
         waypoints = rr.TimeColumn("waypoint", sequence=np.arange(first, first + K))
         for label, values in (errors or {}).items():
@@ -651,6 +656,17 @@ class Recording:
         """Number of rows logged at ``entity`` on ``timeline`` (e.g. the number of poses of the robot)."""
         component = component or self.components(entity)[0]
         return len(self.values(entity, component, timeline)[0])
+
+    def configurations(self, timeline: str) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+        """``(times, X (K, n), coordinate names)``: the joint values recorded on ``timeline`` (``"solution"`` or
+        ``"waypoint"``), as solved — to replay them on the model, reload or continue a run."""
+        entity = "/world/robot/configuration"
+        _, names = self.values(entity, "coordinate_names")
+        if not names:
+            raise RecordingError(f"{self.path} holds no joint values (recorded before they were)")
+        times, rows = self.values(entity, "joint_values", timeline)
+        X = np.array(rows, dtype=float).reshape(len(rows), len(names[-1]))
+        return times, X, tuple(names[-1])
 
     def text(self, entity: str) -> str:
         """The (last) text of a static TextDocument."""

@@ -79,6 +79,14 @@ def test_recording_holds_every_solution(solved, run_file):
     assert [n[0] for n in names] == [case.name for case, _ in results]
 
 
+def test_recorded_joint_values_are_the_solutions(solved, run_file):
+    task, results = solved
+    times, X, names = read_recording(run_file).configurations("solution")
+    np.testing.assert_array_equal(times, np.arange(len(results)))
+    np.testing.assert_array_equal(X, np.array([r.configuration for _, r in results]))
+    assert names == task.robot.coordinate_names
+
+
 def test_recording_holds_history_terms_and_settings(solved, run_file):
     _, results = solved
     rec = read_recording(run_file)
@@ -144,6 +152,14 @@ def test_tracking_recording_matches_the_tracker(tmp_path):
     np.testing.assert_allclose(
         np.array(tracked[0][0]), result.frame_positions(robot, "arm1_ee")[:, 0], atol=1e-6
     )
+    # the joint values themselves, bit for bit: a recorded run can be reloaded and continued
+    times, X, names = rec.configurations("waypoint")
+    np.testing.assert_array_equal(times, np.arange(path.K + 3))
+    np.testing.assert_array_equal(X[: path.K], result.configurations)
+    np.testing.assert_array_equal(X[path.K :], result.configurations[:3])
+    assert names == robot.coordinate_names
+    again = track(robot, path, task, solver="hybrid", initial=X[path.K - 1], progress=False)  # continue
+    assert again.position_error.max() < 1e-9
 
 
 def test_tracking_a_task_file_records_its_desired_paths(tmp_path):
