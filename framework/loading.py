@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import RobotFileError, UnknownJointError, UnknownRobotError
+from .errors import LimitsError, RobotFileError, UnknownJointError, UnknownRobotError
 from .resources import data_dir
 from .robot import Robot, build_joints, default_bounds
 
@@ -79,6 +79,7 @@ def load_robot(
         bounds=bounds,
         unbounded_translation=unbounded_translation,
         source=str(path),
+        strict_groups=groups is not None,  # the index's groups shrink to the joints a user chose to solve
     )
 
 
@@ -140,8 +141,10 @@ def robot_from_urdf(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     unbounded_translation: float = 2.0,
     source: str | None = None,
+    strict_groups: bool = True,
 ) -> Robot:
-    """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot`."""
+    """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot` (``strict_groups``: every member of
+    ``groups`` must be a solved joint)."""
     what = source or "URDF text"
     root = parse_urdf(text, what)
     name = name or root.get("name") or "robot"
@@ -167,7 +170,7 @@ def robot_from_urdf(
         locked=locked_values,
         source=source,
     )
-    robot = _with_groups(robot, groups)
+    robot = _with_groups(robot, groups, strict=strict_groups)
     return robot.with_bounds(bounds) if bounds else robot
 
 
@@ -176,9 +179,18 @@ def _reduce(
 ) -> tuple[pin.Model, dict[str, float]]:
     """Lock every joint not in ``joints`` (and every joint in ``locked``) with Pinocchio's reduced model."""
     names = list(full.names)[1:]
+    fixed = {f.name for f in full.frames if f.type == pin.FrameType.FIXED_JOINT}
     for joint in [*(joints or []), *locked]:
+        if joint in fixed:
+            raise UnknownJointError(f"joint {joint!r} is a fixed joint: there is nothing to solve or lock")
         if joint not in names:
             raise UnknownJointError(f"the model has no joint {joint!r}; joints: {', '.join(names)}")
+    if joints is not None:
+        if not list(joints):
+            raise UnknownJointError(f"joints=[] leaves nothing to solve; joints: {', '.join(names)}")
+        both = sorted(set(joints) & set(locked))
+        if both:
+            raise UnknownJointError(f"joints {both} are both solved (joints=) and locked (locked=); choose one")
     keep = set(names if joints is None else joints) - set(locked)
     to_lock = [n for n in names if n not in keep]
     if not to_lock:
@@ -190,7 +202,7 @@ def _reduce(
         jm = full.joints[jid]
         k, lo, hi = jm.idx_q, full.lowerPositionLimit[jm.idx_q], full.upperPositionLimit[jm.idx_q]
         if joint_name in locked:
-            value = float(locked[joint_name])
+            value = _locked_value(locked[joint_name], joint_name, lo, hi, bounded=jm.nq == 1)
         else:
             value = 0.0 if (jm.nq != 1 or lo <= 0.0 <= hi) else 0.5 * (lo + hi)
         if jm.nq == 1:
@@ -202,6 +214,19 @@ def _reduce(
         values[joint_name] = value
     ids = [full.getJointId(n) for n in to_lock]
     return pin.buildReducedModel(full, ids, q_ref), values
+
+
+def _locked_value(value, joint: str, lo: float, hi: float, *, bounded: bool) -> float:
+    """A locked joint's value as a finite number within the joint's limits (bounded joints)."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise LimitsError(f"locked value of joint {joint!r} must be a number; got {value!r}") from None
+    if not np.isfinite(value):
+        raise LimitsError(f"locked value of joint {joint!r} must be finite; got {value!r}")
+    if bounded and np.isfinite(lo) and np.isfinite(hi) and lo < hi and not lo - 1e-12 <= value <= hi + 1e-12:
+        raise LimitsError(f"locked value {value} of joint {joint!r} is outside its limits [{lo:.6g}, {hi:.6g}]")
+    return value
 
 
 def _leaf_frames(model: pin.Model) -> list[str]:
@@ -217,8 +242,10 @@ def _leaf_frames(model: pin.Model) -> list[str]:
     return leaves
 
 
-def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None) -> Robot:
+def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, strict: bool = True) -> Robot:
     """Attach joint groups: given by name lists, or derived from the end-effector chains.
+
+    Given groups must name solved joints (``strict``; a robot index's groups keep the members that are solved).
 
     Derived groups: joints shared by every end-effector chain form ``"base"`` (when there are several
     end-effectors); each chain's remaining joints form a group named after its end-effector frame.
@@ -230,6 +257,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None) -> Ro
     if groups:
         for group, members in groups.items():
             kept = [m for m in members if m in solved]
+            missing = [m for m in members if m not in solved]
+            if strict and missing:
+                raise UnknownJointError(f"group {group!r} names {missing}, which {'is' if len(missing) == 1 else 'are'}"
+                                        f" not solved (solved joints: {', '.join(robot.joint_names)})")
             if kept:
                 result[group] = _coords(robot, kept)
     else:

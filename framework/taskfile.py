@@ -102,6 +102,10 @@ def _rotation(axis: int):
 
 
 _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
+#: Keys of ``[task]``, and the top-level tables of an IK / tracking task file.
+TASK_KEYS = {"name", "robot", "description", "priorities", "joints", "locked", "end_effectors", "groups", "xacro_args",
+             "bounds", "package_dirs"}
+TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench"}
 SOLVER_KEYS = {"name", "population", "max_iterations", "tolerance", "seed", "bounds", "options", "stop_at_tolerance",
                "warm_start", "predict"}
 #: ``[trajectory]`` types -> (required keys, optional keys); every type also takes ``name`` and ``orientation``.
@@ -260,11 +264,18 @@ def task_from_dict(raw: dict[str, Any], path: str | Path, *, points: int | None 
 
 def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> TaskFile:
     task = _table(raw, "task", path)
+    unknown_tables = sorted(set(raw) - TABLES)
+    if unknown_tables:
+        raise TaskError(f"unknown tables {unknown_tables}; known: {sorted(TABLES)} (and [reach] or [placement] "
+                        "for those task kinds)")
+    unknown = sorted(set(task) - TASK_KEYS)
+    if unknown:
+        raise TaskError(f"[task] has unknown keys {unknown}; known: {sorted(TASK_KEYS)}")
     if "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")
     robot_source = task["robot"]
     local = path.parent / str(robot_source)
-    robot = load_robot(local if local.is_file() else robot_source, **_robot_options(task))
+    robot = load_robot(local if local.is_file() else robot_source, **_robot_options(task, path))
     solver = dict(raw.get("solver", {}))
     unknown = set(solver) - SOLVER_KEYS
     if unknown:
@@ -306,11 +317,13 @@ def _table(raw: Mapping, key: str, path: Path) -> dict:
     return raw[key]
 
 
-def _robot_options(task: Mapping[str, Any]) -> dict[str, Any]:
+def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
     options = {}
-    for key in ("joints", "locked", "end_effectors", "xacro_args"):
+    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args"):
         if key in task:
             options[key] = task[key]
+    if "package_dirs" in task:  # relative to the task file
+        options["package_dirs"] = [path.parent / str(p) for p in task["package_dirs"]]
     if "bounds" in task:
         options["bounds"] = {k: tuple(evaluate(v, {}, f"[task] bounds.{k}")) for k, v in task["bounds"].items()}
     return options

@@ -1,0 +1,67 @@
+"""Mistakes that used to pass silently are our errors, naming the problem (API and task files)."""
+
+from __future__ import annotations
+
+import pytest
+
+import framework as fw
+from framework.cli import EXIT_INPUT, main
+from framework.errors import LimitsError, TaskError, UnknownJointError
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    (dict(joints=["joint1", "joint2"], locked={"joint2": 0.1}), UnknownJointError, "both solved"),
+    (dict(joints=["joint1", "joint2"], groups={"g": ["joint3"]}), UnknownJointError, "names \\['joint3'\\]"),
+    (dict(joints=["joint1"], locked={"joint2": 10.0}), LimitsError, "outside its limits"),
+    (dict(joints=["joint1"], locked={"joint2": float("nan")}), LimitsError, "must be finite"),
+    (dict(joints=["joint1"], locked={"joint2": "x"}), LimitsError, "must be a number"),
+    (dict(joints=["joint1", "dh1"]), UnknownJointError, "'dh1' is a fixed joint"),
+    (dict(joints=[]), UnknownJointError, "nothing to solve"),
+], ids=["solved and locked", "group of an unsolved joint", "locked out of limits", "locked NaN", "locked text",
+        "fixed joint", "no joint"])
+def test_robot_loading_mistakes(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        fw.load_robot("youbot_arm", **kwargs)
+
+
+def test_index_groups_keep_the_solved_joints():
+    robot = fw.load_robot("youbot_dual_mobile", joints=["arm1_joint1", "arm1_joint2"])
+    assert list(robot.groups) == ["arm1"] and robot.group("arm1").tolist() == [0, 1]
+
+
+TASK = """
+[task]
+name = "t"
+robot = "youbot_arm"
+EXTRA
+[[terms]]
+type = "position"
+frame = "ee"
+target = [0.3, 0.0, 0.3]
+"""
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('joint = ["joint1"]', "\\[task\\] has unknown keys \\['joint'\\]"),
+    ('[solvr]\nname = "de"', "unknown tables \\['solvr'\\]"),
+    ('[solver]\npopulaton = 5', "\\[solver\\] has unknown keys \\['populaton'\\]"),
+], ids=["task key typo", "table typo", "solver key typo"])
+def test_task_file_mistakes_name_the_table_and_key(tmp_path, capsys, extra, message):
+    path = tmp_path / "t.toml"
+    text = TASK.replace("EXTRA", extra) if extra.startswith("joint") else TASK.replace("EXTRA", "") + extra
+    path.write_text(text)
+    from framework.taskfile import load_task
+
+    with pytest.raises(TaskError, match=message):
+        load_task(path)
+    assert main(["run", str(path)]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(path) in err  # one line, naming the file
+
+
+def test_task_files_take_groups(tmp_path):
+    from framework.taskfile import load_task
+
+    path = tmp_path / "t.toml"
+    path.write_text(TASK.replace("EXTRA", 'groups = { wrist = ["joint4", "joint5"] }'))
+    assert load_task(path).robot.group("wrist").tolist() == [3, 4]
