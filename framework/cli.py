@@ -184,6 +184,7 @@ def _run(args, console: Console) -> int:
             )
             if recorder:
                 recorder.log_case(case, result)
+            interrupted = result.stop_reason == "interrupted"
             all_ok &= result.success
             table.add_column(case.name, justify="right")
             for n in names:
@@ -194,6 +195,8 @@ def _run(args, console: Console) -> int:
             rows["iterations"].append(str(result.iterations))
             rows["evaluations"].append(str(result.evaluations))
             rows["time (s)"].append(f"{result.wall_time:.3f}")
+            if interrupted:  # Ctrl-C: the cases done so far are shown, the others are not started
+                break
     for label, cells in rows.items():
         table.add_row(escape(label), *cells)
     console.print(table)
@@ -202,6 +205,9 @@ def _run(args, console: Console) -> int:
     console.print(f"configuration of {cases[-1].name}: " + "; ".join(
         f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
     _recorded(args, console)
+    if interrupted:
+        Console(stderr=True).print(f"interrupted during {case.name!r}: {len(table.columns) - 1} of {len(cases)} cases shown")
+        return EXIT_INTERRUPTED
     return EXIT_OK if all_ok else EXIT_MISSED
 
 

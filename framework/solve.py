@@ -41,7 +41,7 @@ class IKResult:
             measure).
         errors: each task term's error in its own unit, by name: distance [m] for positions and relative
             positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``).
-        success: every entry of ``errors`` within its tolerance.
+        success: every entry of ``errors`` within its tolerance (never after an interruption).
         stop_reason: why the solver stopped (``tolerance``, ``max_iterations``, ``time_budget``, ``stagnation``,
             ``local_minimum``, ``interrupted``, ...).
         iterations, evaluations: solver iterations and cost / residual evaluations.
@@ -188,7 +188,9 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     if errors is None:
         errors = task_errors(program, x)
     error_list = errors.tolist()
-    success = program.within(error_list, request.tolerance, request.angle_tolerance)
+    # an interrupted solve is never a success, whatever its last point (the user stopped it before its end)
+    success = outcome.stop_reason != "interrupted" and program.within(error_list, request.tolerance,
+                                                                       request.angle_tolerance)
     value_list = values.tolist()
     return IKResult(
         configuration=x,

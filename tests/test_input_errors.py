@@ -65,3 +65,28 @@ def test_task_files_take_groups(tmp_path):
     path = tmp_path / "t.toml"
     path.write_text(TASK.replace("EXTRA", 'groups = { wrist = ["joint4", "joint5"] }'))
     assert load_task(path).robot.group("wrist").tolist() == [3, 4]
+
+
+def test_ctrl_c_in_a_multi_case_run_stops_it_and_is_never_success(tmp_path):
+    """SIGINT during the first of four cases: exit 130, that case shown and not a success, the others not run."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import os
+    from pathlib import Path
+
+    root = str(Path(fw.__file__).resolve().parents[1])  # this process's framework: its numba cache is warm
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    process = subprocess.Popen([sys.executable, "-m", "framework.cli", "run", "youbot_dual_coordinated_ik",
+                                "--solver", "cmaes", "--iterations", "200000"], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
+    time.sleep(8)  # imports and the start of the first case's 200,000 generations (~3 minutes in all)
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 130, (out, err)
+    assert "interrupted during 'target 1'" in err and "1 of 4 cases" in err
+    success_row = next(line for line in out.splitlines() if line.startswith("│ success"))
+    assert "no" in success_row and "yes" not in success_row
+    assert "target 2" not in out
