@@ -505,14 +505,15 @@ def read_results(path: str | Path, keys: set[tuple] | None = None) -> list[RunRe
     path = Path(path)
     if not path.is_file():
         return []
-    records = []
+    records, seen = [], set()
     with path.open() as f:
         for line in f:
             try:
                 record = RunRecord.from_json(line)
             except (json.JSONDecodeError, TypeError):
                 continue  # a line torn by a crash: that run is simply run again
-            if keys is None or record.key in keys:
+            if (keys is None or record.key in keys) and record.key not in seen:
+                seen.add(record.key)  # a run written twice (by a bench of an older version) counts once
                 records.append(record)
     return records
 
@@ -526,11 +527,17 @@ def grid_records(grid: Grid, results: str | Path) -> list[RunRecord]:
 def drop_runs(results: str | Path, keys: set[tuple]) -> int:
     """Remove the records with these keys from a results file (e.g. to re-run them after a code change).
 
-    Returns how many were removed; the file is rewritten through a temporary file and an atomic rename.
+    Returns how many were removed; the file is rewritten through a temporary file and an atomic rename, under
+    the file's lock (no bench may be writing it meanwhile).
     """
     results = Path(results)
     if not results.is_file():
         return 0
+    with _exclusive(results):
+        return _drop_runs(results, keys)
+
+
+def _drop_runs(results: Path, keys: set[tuple]) -> int:
     kept, removed = [], 0
     for line in results.read_text().splitlines(keepends=True):
         try:
@@ -624,6 +631,30 @@ def run_grid(
     specs = list(grid.specs if isinstance(grid, Grid) else grid)
     results = Path(results)
     results.parent.mkdir(parents=True, exist_ok=True)
+    with _exclusive(results):
+        return _run_locked(specs, results, jobs, max_runs, chunk_size, progress, console, stop, scheduler)
+
+
+@contextmanager
+def _exclusive(results: Path) -> Iterator[None]:
+    """Hold the results file's lock (``<file>.lock``) for the whole run: a second bench on the same file is an
+    error, not a second writer of the same runs."""
+    import fcntl
+
+    lock = results.with_name(results.name + ".lock").open("a")
+    try:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        lock.close()
+        raise MetaikError(f"another bench is writing {results}; wait for it, or give another --out") from None
+    try:
+        yield
+    finally:
+        fcntl.flock(lock, fcntl.LOCK_UN)
+        lock.close()
+
+
+def _run_locked(specs, results: Path, jobs, max_runs, chunk_size, progress, console, stop, scheduler) -> RunReport:
     _drop_torn_tail(results)
     done = {r.key for r in read_results(results)}
     pending = [s for s in specs if s.key not in done]

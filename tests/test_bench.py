@@ -299,3 +299,23 @@ def test_bench_command(small, tmp_path):
     assert args.handler(args, console) == 0
     assert len(_lines(out / "results.jsonl")) == 4
     assert (out / "figures" / "convergence_near.png").stat().st_size > 0
+
+
+def test_a_second_bench_on_the_same_file_is_refused_and_duplicates_count_once(small, tmp_path):
+    import fcntl
+
+    from framework.errors import MetaikError
+
+    grid = plan([small])
+    results = tmp_path / "r.jsonl"
+    run_grid(grid, results, jobs=1, max_runs=3, progress=False)
+    with open(tmp_path / "r.jsonl.lock", "a") as held:  # another bench holds the file
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        with pytest.raises(MetaikError, match="another bench is writing"):
+            run_grid(grid, results, jobs=1, progress=False)
+        fcntl.flock(held, fcntl.LOCK_UN)
+    lines = _lines(results)
+    results.write_text("\n".join(lines + lines[:2]) + "\n")  # two runs written twice (older versions could)
+    assert len(read_results(results)) == 3
+    report = run_grid(grid, results, jobs=1, progress=False)
+    assert report.skipped == 3 and len(read_results(results)) == len(grid.specs)
