@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -283,11 +283,10 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
                   f"({settings.get('max_iterations', 300)} iterations per point): {task.description}")
     tolerance = settings.get("tolerance", 1e-4)
     results: list = []
-    with _recorder(args, task, settings) as recorder:
-        interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results)
+    with _recorder(args, task, settings) as recorder, _waypoint_csv(args.output, task.robot) as csv_row:
+        interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results, csv_row)
     console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
     if args.output is not None:
-        write_tracking_csv(args.output, task.robot, results)
         console.print(f"wrote {args.output}")
     _recorded(args, console)
     if interrupted:
@@ -296,12 +295,17 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
 
 
-def _track_cases(args, task, cases, settings, solver, tolerance, recorder, results: list) -> bool:
-    """Track each case in turn, appending ``(case, result)`` to ``results`` (and to the recording, if any);
-    returns True when Ctrl-C stopped the run."""
-    from .tracking import track
+def _track_cases(args, task, cases, settings, solver, tolerance, recorder, results: list, csv_row) -> bool:
+    """Track each case in turn, appending ``(case, result)`` to ``results`` (and to the recording, if any) and
+    each waypoint to the CSV as soon as it is solved; returns True when Ctrl-C stopped the run."""
+    from .tracking import track, waypoint_errors
 
     for case in cases:
+        kinds = case.problem.program.term_kinds  # the same terms at every waypoint of the case
+
+        def solved(k: int, result, case=case, kinds=kinds) -> None:
+            csv_row(case.name, k, result.configuration, waypoint_errors(result, kinds))
+
         result = track(
             task.robot, case.trajectory, case.builder,
             solver=solver,
@@ -317,6 +321,7 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
             priorities=task.priorities,
             options=settings.get("options"),
             progress=False if args.no_progress else None,
+            callback=solved,
         )
         results.append((case, result))
         if recorder:
@@ -359,17 +364,29 @@ def tracking_table(task, results: list, solver: str, seed: int, tolerance: float
     return table
 
 
-def write_tracking_csv(path: Path, robot, results: list) -> None:
-    """One row per waypoint: case, k, joint coordinates, position / orientation / motion error."""
+@contextmanager
+def _waypoint_csv(path: Path | None, robot):
+    """A writer of one CSV row per solved waypoint (case, k, joint coordinates, position / orientation / motion
+    error), flushed at once so a killed run keeps every finished waypoint; a no-op without ``path``."""
     import csv
 
-    with open(path, "w", newline="") as handle:
+    if path is None:
+        yield lambda *row: None
+        return
+    try:
+        handle = open(path, "w", newline="")
+    except OSError as err:
+        raise TaskError(f"cannot write --output {path}: {err.strerror}") from None
+    with handle:
         writer = csv.writer(handle)
         writer.writerow(["case", "k", *robot.coordinate_names, "position_error", "orientation_error", "motion_error"])
-        for case, result in results:
-            for k, q in enumerate(result.configurations):
-                writer.writerow([case.name, k, *(f"{v:.17g}" for v in q), f"{result.position_error[k]:.6e}",
-                                 f"{result.orientation_error[k]:.6e}", f"{result.motion_error[k]:.6e}"])
+        handle.flush()
+
+        def row(case: str, k: int, q, errors) -> None:
+            writer.writerow([case, k, *(f"{v:.17g}" for v in q), *(f"{e:.6e}" for e in errors)])
+            handle.flush()
+
+        yield row
 
 
 def _mean(a: np.ndarray) -> float:

@@ -490,21 +490,30 @@ def _builder(robot: Robot, task: TrackingTask | TaskBuilder | None) -> TaskBuild
     return task
 
 
+def waypoint_errors(result: IKResult, kinds: Sequence[str]) -> tuple[float, float, float]:
+    """A waypoint's position, orientation and motion errors: the sums of its unweighted terms of each kind
+    (``kinds``: :attr:`~framework.costs.program.Program.term_kinds` of its problem)."""
+    totals = {"position": 0.0, "orientation": 0.0, "motion": 0.0}
+    for value, kind in zip(result.terms.values(), kinds):
+        if kind in totals:
+            totals[kind] += value
+    return totals["position"], totals["orientation"], totals["motion"]
+
+
 def _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance) -> TrackingResult:
     results = [r for r, _ in rows]
     names = list(results[0].terms) if results else []
     terms = {name: np.array([r.terms.get(name, np.nan) for r in results]) for name in names}
 
-    def total(kind: str) -> np.ndarray:
-        return np.array([sum(v for v, what in zip(r.terms.values(), kinds) if what == kind) for r, kinds in rows])
+    sums = np.array([waypoint_errors(r, kinds) for r, kinds in rows]).reshape(len(rows), 3)
 
     return TrackingResult(
         trajectory=trajectory,
         configurations=np.array([r.configuration for r in results]).reshape(len(results), q0.shape[0]),
         initial=q0,
-        position_error=total("position"),
-        orientation_error=total("orientation"),
-        motion_error=total("motion"),
+        position_error=sums[:, 0],
+        orientation_error=sums[:, 1],
+        motion_error=sums[:, 2],
         task_error=np.array([r.task_error for r in results]),
         cost=np.array([r.cost for r in results]),
         terms=terms,

@@ -151,3 +151,34 @@ def test_nan_in_a_csv_path_exits_2(tmp_path, capsys):
     file.write_text(TRACK)
     assert main(["run", str(file)]) == EXIT_INPUT
     assert "NaN" in capsys.readouterr().err
+
+
+def test_a_killed_tracking_run_keeps_every_finished_waypoint_in_its_csv(tmp_path):
+    """SIGKILL midway through a slow tracking run: the CSV holds complete rows for the waypoints solved so far,
+    each equal to the same waypoint of an uninterrupted run (same seed)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    root = str(Path(fw.__file__).resolve().parents[1])  # this process's framework: its numba cache is warm
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    killed, full = tmp_path / "killed.csv", tmp_path / "full.csv"
+    command = [sys.executable, "-m", "framework.cli", "run", "paper000_sinusoidal", "--solver", "cmaes",
+               "--points", "60", "--no-progress", "--output"]
+    process = subprocess.Popen([*command, str(killed)], env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and (not killed.exists() or len(killed.read_text().splitlines()) < 4):
+        time.sleep(0.05)
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait()
+    rows = killed.read_text().splitlines()
+    assert 4 <= len(rows) < 61, len(rows)  # header + some waypoints, killed before the end
+    subprocess.run([*command, str(full)], env=env, cwd=tmp_path, check=True, capture_output=True)
+    reference = full.read_text().splitlines()
+    assert len(reference) == 61
+    assert rows[-1].count(",") == reference[0].count(",")  # no torn last row
+    assert rows == reference[: len(rows)]
