@@ -305,6 +305,8 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
 
         def solved(k: int, result, case=case, kinds=kinds) -> None:
             csv_row(case.name, k, result.configuration, waypoint_errors(result, kinds))
+            if recorder:
+                recorder.log_waypoint(result.configuration)
 
         result = track(
             task.robot, case.trajectory, case.builder,

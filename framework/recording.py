@@ -129,6 +129,7 @@ class Recorder:
         self._traced: dict[str, int] = {}  # slug -> last iteration a term logger logged
         self._count = 0
         self._waypoints = 0
+        self._posed = 0  # waypoints of the path in progress posed by log_waypoint
         self._rr = rr
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -429,7 +430,10 @@ class Recorder:
                     ),
                 )
         stream.reset_time()
-        self._log_poses(M, "waypoint", range(first, first + K), Q)
+        posed = min(self._posed, K)  # already posed as they were solved (log_waypoint)
+        if posed < K:
+            self._log_poses(M[posed:], "waypoint", range(first + posed, first + K), Q[posed:])
+        self._posed = 0
         stream.reset_time()
         waypoints = rr.TimeColumn("waypoint", sequence=np.arange(first, first + K))
         for label, values in (errors or {}).items():
@@ -457,6 +461,17 @@ class Recorder:
         self._count += 1
         self._waypoints += K
         return slug
+
+    def log_waypoint(self, x: np.ndarray) -> None:
+        """Pose the robot at the next waypoint of the path being solved, as soon as it is solved (flushed, so a
+        killed run keeps it); the :meth:`log_path` / :meth:`log_tracking` of that path then poses only the rest."""
+        stream = self._require()
+        x = self.robot.check_population(np.asarray(x, dtype=float)[None], "waypoint configuration")
+        stream.reset_time()
+        self._log_poses(self.drawing.world_frames(x[0]), "waypoint", [self._waypoints + self._posed], x)
+        stream.reset_time()
+        stream.flush()
+        self._posed += 1
 
     def log_tracking(self, tracking: TrackingResult, *, task: Any = None, name: str | None = None) -> str:
         """Log what :func:`framework.tracking.track` returned (see :meth:`log_path`).

@@ -153,9 +153,9 @@ def test_nan_in_a_csv_path_exits_2(tmp_path, capsys):
     assert "NaN" in capsys.readouterr().err
 
 
-def test_a_killed_tracking_run_keeps_every_finished_waypoint_in_its_csv(tmp_path):
+def test_a_killed_tracking_run_keeps_every_finished_waypoint(tmp_path):
     """SIGKILL midway through a slow tracking run: the CSV holds complete rows for the waypoints solved so far,
-    each equal to the same waypoint of an uninterrupted run (same seed)."""
+    each equal to the same waypoint of an uninterrupted run (same seed), and the recording holds their poses."""
     import os
     import signal
     import subprocess
@@ -168,8 +168,8 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint_in_its_csv(tmp_path
     killed, full = tmp_path / "killed.csv", tmp_path / "full.csv"
     command = [sys.executable, "-m", "framework.cli", "run", "paper000_sinusoidal", "--solver", "cmaes",
                "--points", "60", "--no-progress", "--output"]
-    process = subprocess.Popen([*command, str(killed)], env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
-                               stderr=subprocess.DEVNULL)
+    process = subprocess.Popen([*command, str(killed), "--record", str(tmp_path / "killed.rrd")], env=env,
+                               cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and (not killed.exists() or len(killed.read_text().splitlines()) < 4):
         time.sleep(0.05)
@@ -177,8 +177,18 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint_in_its_csv(tmp_path
     process.wait()
     rows = killed.read_text().splitlines()
     assert 4 <= len(rows) < 61, len(rows)  # header + some waypoints, killed before the end
-    subprocess.run([*command, str(full)], env=env, cwd=tmp_path, check=True, capture_output=True)
+    subprocess.run([*command, str(full), "--record", str(tmp_path / "full.rrd")], env=env, cwd=tmp_path,
+                   check=True, capture_output=True)
     reference = full.read_text().splitlines()
     assert len(reference) == 61
     assert rows[-1].count(",") == reference[0].count(",")  # no torn last row
     assert rows == reference[: len(rows)]
+    from framework.recording import read_recording
+
+    _, X_full, _ = read_recording(tmp_path / "full.rrd").configurations("waypoint")
+    assert len(X_full) == 60  # each waypoint posed once
+    recording = read_recording(tmp_path / "killed.rrd")
+    assert not recording.complete
+    _, X, _ = recording.configurations("waypoint")
+    assert len(rows) - 1 <= len(X) <= len(rows)  # the waypoint being written when killed may be in one only
+    np.testing.assert_array_equal(X[: len(rows) - 1], X_full[: len(rows) - 1])
