@@ -746,9 +746,25 @@ def _run_serial(
 _WORKER: dict[str, Any] = {}
 
 
-def _init_worker(queue, stop_event) -> None:
+def _init_worker(queue, stop_event, parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides when to stop
+    _die_with_parent(parent)
     _WORKER.update(queue=queue, stop=stop_event, cache=_TaskCache())
+
+
+def _die_with_parent(parent: int) -> None:
+    """Have the kernel end this worker when the bench process dies (Linux ``PR_SET_PDEATHSIG``), so a killed
+    bench leaves no worker running (nor holding its stdout); elsewhere the pool's own shutdown is relied on."""
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the parent died before the request: nobody is left to collect the runs
+        os._exit(1)
 
 
 def _run_chunk(chunk: Sequence[RunSpec]) -> int:
@@ -781,7 +797,7 @@ def _run_parallel(
     sent = 0
     failure: BaseException | None = None
     with ProcessPoolExecutor(
-        jobs, mp_context=ctx, initializer=_init_worker, initargs=(queue, stop_event)
+        jobs, mp_context=ctx, initializer=_init_worker, initargs=(queue, stop_event, os.getpid())
     ) as pool:
         futures: set[Future] = {pool.submit(_run_chunk, c) for c in _chunks(pending, jobs, chunk_size)}
         while futures or received < sent:

@@ -319,3 +319,50 @@ def test_a_second_bench_on_the_same_file_is_refused_and_duplicates_count_once(sm
     assert len(read_results(results)) == 3
     report = run_grid(grid, results, jobs=1, progress=False)
     assert report.skipped == 3 and len(read_results(results)) == len(grid.specs)
+
+
+def test_killing_the_bench_ends_its_workers(small, tmp_path):
+    """SIGKILL of a `metaik bench -j 2` process: its worker processes end too (none left holding its stdout)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    import framework as fw
+
+    root = str(Path(fw.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    slow = small.read_text().replace("max_iterations = 15", "max_iterations = 3000").replace("runs = 3", "runs = 30")
+    small.write_text(slow)
+    bench = subprocess.Popen([sys.executable, "-m", "framework.cli", "bench", str(small), "-j", "2", "--out",
+                              str(tmp_path / "out"), "--no-figures"], env=env, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+
+    def children() -> list[int]:
+        found = []
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == bench.pid and fields[0] != "Z":
+                found.append(int(stat.parent.name))
+        return found
+
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(children()) < 2:
+        time.sleep(0.1)
+    workers = children()
+    assert len(workers) >= 2
+    time.sleep(1.0)
+    bench.kill()
+    bench.wait()
+    deadline = time.monotonic() + 20
+    alive = workers
+    while time.monotonic() < deadline and alive:
+        alive = [pid for pid in workers if Path(f"/proc/{pid}").exists()
+                 and Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"]
+        time.sleep(0.1)
+    assert not alive, f"workers still running after their bench was killed: {alive}"
