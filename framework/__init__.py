@@ -6,7 +6,7 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
+from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
                     RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -35,6 +35,7 @@ __all__ = [
     "ConfigurationError",
     "Evaluation",
     "IKResult",
+    "Cone",
     "Direction",
     "Distance",
     "JointLimitPenalty",

@@ -16,8 +16,8 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | direction | joint_target | distance |
-                                          # motion | relative_position | joint_limits
+    type = "position"                     # position | orientation | direction | cone | joint_target |
+                                          # distance | motion | relative_position | joint_limits
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -69,7 +69,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import (Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
+from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
                     RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
@@ -127,6 +127,7 @@ TERM_KEYS = {
     "motion": {"group", "previous", "norm"},
     "relative_position": {"frame_a", "frame_b", "offset"},
     "direction": {"frame", "direction", "axis"},
+    "cone": {"frame", "direction", "axis", "max_angle"},
     "joint_target": {"group", "target"},
     "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
     "joint_limits": set(),
@@ -364,6 +365,9 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
             elif kind == "direction":
                 term = Direction(spec["frame"], value("direction"), axis=value("axis") if "axis" in spec else
                                  (0.0, 0.0, 1.0), name=name)
+            elif kind == "cone":
+                term = Cone(spec["frame"], value("direction"), float(value("max_angle")),
+                            axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0), name=name)
             elif kind == "joint_target":
                 term = JointTarget(spec["group"], value("target"), name=name)
             elif kind == "distance":

@@ -212,3 +212,26 @@ def test_bad_distances():
         fw.Distance("ee", [0, 0, 0], exactly=0.5, at_most=0.6)
     with pytest.raises(TaskError, match="no point to move"):
         fw.Distance("a", "b", exactly=0.1).set_target([0, 0, 0])
+
+
+def test_cone_residual_jacobian_and_solve():
+    arm = fw.load_robot("puma560")
+    rng = np.random.default_rng(4)
+    term = fw.Cone("ee", [0, 0, -1], 0.3)
+    program = Program(arm, 1.0 * term)
+    h = 1e-7
+    inside = 0
+    for x in arm.random_configurations(rng, 12):
+        r, J = residuals(program, x)
+        theta = _angle(arm, x, "ee", np.array([0, 0, 1.0]), [0, 0, -1])
+        assert r[0] == pytest.approx(max(theta - 0.3, 0.0), abs=1e-12)
+        inside += theta <= 0.3
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(arm.n) * h])
+        np.testing.assert_allclose(J, fd, atol=2e-6)
+    result = fw.solve(fw.Problem(arm, term + fw.Position("ee", [0.4, 0.1, 0.2]) + 0.1 * fw.Motion("all", arm.middle)),
+                      tolerance=1e-9)
+    assert result.success
+    assert _angle(arm, result.configuration, "ee", np.array([0, 0, 1.0]), [0, 0, -1]) <= 0.3 + 1e-9
+    with pytest.raises(TaskError, match="max_angle"):
+        fw.Cone("ee", [0, 0, 1], -0.1)

@@ -1,7 +1,7 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
-from .direction import Direction
+from .direction import Cone, Direction
 from .distance import Distance
 from .limits import JointLimitPenalty
 from .motion import JointTarget, Motion
@@ -14,6 +14,7 @@ from .relative import RelativePosition
 __all__ = [
     "LEVELS",
     "Block",
+    "Cone",
     "Direction",
     "Distance",
     "JointLimitPenalty",

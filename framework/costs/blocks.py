@@ -15,12 +15,15 @@ kind            residual                                      Jacobian          
 ``LIMITS``      ``min(0, x − l) + max(0, x − u)`` (n)         ``±1`` outside, 0 inside    ``l`` (n), ``u`` (n)
 ``AXIS``        ``Bᵀ θ/sinθ (d × R_a e)`` (2) [rad], norm = θ  see :func:`block_residual`  ``e, d, b₁, b₂`` (12)
 ``DISTANCE``    ``‖v‖ − hi`` above, ``‖v‖ − lo`` below, else 0 ``uᵀ ∂v`` outside the band   ``point, lo, hi`` (5)
+``CONE``        ``θ − α`` when the axis is outside, else 0     ``∂θ`` outside the cone      ``e, d, α`` (7)
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
 ``R_a e`` and ``d``, the residual the rotation vector taking ``d`` to ``R_a e`` written in a basis ``B = (b₁, b₂)``
 of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free). ``DISTANCE``: ``v = p_a − p_b``
 (frame ``b``) or ``p_a −`` a point (no frame ``b``), held within ``[lo, hi]`` (one row, a hinge on each side).
+``CONE``: the angle ``θ`` between ``R_a e`` and ``d`` held below ``α`` (one row, a hinge; its second order is
+left out: Gauss-Newton curvature in the Newton phase).
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -32,7 +35,7 @@ import numba
 import numpy as np
 
 # Block kinds
-POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE = 0, 1, 2, 3, 4, 5, 6
+POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE = 0, 1, 2, 3, 4, 5, 6, 7
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -156,6 +159,8 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]
     elif kind == AXIS:
         axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == CONE:
+        cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == DISTANCE:
         u, dist = distance_direction(out, fa, fb, params, p)
         lo, hi = params[p + 3], params[p + 4]
@@ -248,6 +253,29 @@ def axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
 
 
 @numba.njit(cache=True)
+def cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
+    """The ``CONE`` residual ``θ − α`` outside the cone (0 inside), ``θ = atan2(‖d × w‖, d·w)``, and its Jacobian
+    ``dθ = cosθ (d×w)·(d×dw)/sinθ − sinθ d·dw`` with ``dw = ω_i × w`` (zero inside the cone)."""
+    w0, w1, w2, d0, d1, d2 = axis_world(out, fa, params, p)
+    c0, c1, c2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0
+    s = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+    co = d0 * w0 + d1 * w1 + d2 * w2
+    theta = np.arctan2(s, co)
+    active = theta > params[p + 6]
+    r[row] = theta - params[p + 6] if active else 0.0
+    if not want_jacobian:
+        return
+    for i in range(n):
+        g = 0.0
+        if active and s > 0.0:
+            o0, o1, o2 = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+            e0, e1, e2 = o1 * w2 - o2 * w1, o2 * w0 - o0 * w2, o0 * w1 - o1 * w0  # dw = ω × w
+            x0, x1, x2 = d1 * e2 - d2 * e1, d2 * e0 - d0 * e2, d0 * e1 - d1 * e0  # d × dw
+            g = co * (c0 * x0 + c1 * x1 + c2 * x2) / s - s * (d0 * e0 + d1 * e1 + d2 * e2)
+        Jr[row, i] = g
+
+
+@numba.njit(cache=True)
 def rho_value(rho, scale, r, row, rows) -> float:
     """The value of a block from its residual ``r[row:row + rows]``."""
     if rho == L1:
@@ -327,7 +355,7 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
     ``½ ω_i × ω_j`` (zero on the diagonal) — exact for positions, exact for orientations on the target (``r = 0``).
     """
     kind = bint[b, KIND]
-    if kind == COORDINATES or kind == LIMITS:
+    if kind == COORDINATES or kind == LIMITS or kind == CONE:
         return
     if kind == ORIENTATION:
         p, fa = bint[b, PPTR], bint[b, FA]

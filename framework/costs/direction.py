@@ -66,3 +66,27 @@ class Direction(Term):
 
     def __repr__(self) -> str:
         return f"Direction({self.frame!r}, {np.round(self.direction, 6).tolist()}, axis={self.axis.tolist()})"
+
+
+class Cone(Direction):
+    """The frame's ``axis`` within ``max_angle`` [rad] of the world ``direction`` (a cone around it): zero inside,
+    the angle in excess outside ("keep the camera roughly level", BioIK's cone goal).
+
+    Residual (1,): ``θ − max_angle`` when the axis is outside the cone, else 0 [rad]; a task term held to the
+    angular tolerance.
+    """
+
+    def __init__(self, frame: str, direction: Sequence[float], max_angle: float, *,
+                 axis: Sequence[float] = (0.0, 0.0, 1.0), name: str | None = None):
+        if not (isinstance(max_angle, (int, float)) and np.isfinite(max_angle) and 0 <= max_angle <= np.pi):
+            raise TaskError(f"cone max_angle must be an angle in [0, pi] rad; got {max_angle!r}")
+        self.max_angle = float(max_angle)
+        super().__init__(frame, direction, axis=axis, name=name or f"cone[{frame}]")
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        params = np.concatenate([self.axis, self.direction, [self.max_angle]])
+        return (Block(B.CONE, B.NORM, 1, self.frames, params, tolerance=B.TOL_ANGULAR),)
+
+    def __repr__(self) -> str:
+        return (f"Cone({self.frame!r}, {np.round(self.direction, 6).tolist()}, max_angle={self.max_angle:g}, "
+                f"axis={self.axis.tolist()})")
