@@ -7,7 +7,7 @@ tracking → results and recordings.
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
 from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
-                    RelativePosition, Term)
+                    RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
     LimitsError,
@@ -46,6 +46,7 @@ __all__ = [
     "Pose",
     "Position",
     "Problem",
+    "RelativePose",
     "RelativePosition",
     "Term",
     "solver_names",

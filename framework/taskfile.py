@@ -17,7 +17,8 @@ A task file reads top to bottom like the experiment it describes::
 
     [[terms]]
     type = "position"                     # position | orientation | direction | cone | joint_target |
-                                          # distance | motion | relative_position | joint_limits
+                                          # distance | motion | relative_position | relative_pose |
+                                          # joint_limits
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -70,7 +71,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
-                    RelativePosition)
+                    RelativePose, RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
@@ -126,6 +127,7 @@ TERM_KEYS = {
     "orientation": {"frame", "target"},
     "motion": {"group", "previous", "norm"},
     "relative_position": {"frame_a", "frame_b", "offset"},
+    "relative_pose": {"frame_a", "frame_b", "offset", "offset_rotation"},
     "direction": {"frame", "direction", "axis"},
     "cone": {"frame", "direction", "axis", "max_angle"},
     "joint_target": {"group", "target"},
@@ -360,6 +362,9 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
                 term = Position(spec["frame"], value("target"), name=name)
             elif kind == "orientation":
                 term = Orientation(spec["frame"], value("target"), name=name)
+            elif kind == "relative_pose":  # offset: the position of b in a; offset_rotation: its rotation
+                rotation = value("offset_rotation") if "offset_rotation" in spec else np.eye(3)
+                term = RelativePose(spec["frame_a"], spec["frame_b"], (value("offset"), rotation), name=name)
             elif kind == "relative_position":
                 term = RelativePosition(spec["frame_a"], spec["frame_b"], value("offset"), name=name)
             elif kind == "direction":

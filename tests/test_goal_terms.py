@@ -235,3 +235,61 @@ def test_cone_residual_jacobian_and_solve():
     assert _angle(arm, result.configuration, "ee", np.array([0, 0, 1.0]), [0, 0, -1]) <= 0.3 + 1e-9
     with pytest.raises(TaskError, match="max_angle"):
         fw.Cone("ee", [0, 0, 1], -0.1)
+
+
+def test_relative_pose_against_pinocchio_differences_and_a_two_hand_grasp(robot, rng):
+    """Two hands holding one object: the pose of hand 2 in hand 1 against Pinocchio's relative placement; its
+    Jacobian against differences; both value views; solved with hand 1 on a target, checked by Pinocchio."""
+    offset = pin.SE3(pin.utils.rpyToMatrix(0.3, -0.2, 1.0), np.array([0.1, 0.25, -0.05]))
+    term = fw.RelativePose("arm1_ee", "arm2_ee", offset)
+    program = Program(robot, 1.0 * term)
+    h = 1e-7
+    for x in robot.random_configurations(rng, 4):
+        r, J = residuals(program, x)
+        T = robot.frame_placement(x, "arm1_ee").inverse() * robot.frame_placement(x, "arm2_ee")
+        np.testing.assert_allclose(r, np.r_[T.translation - offset.translation,
+                                            pin.log3(offset.rotation.T @ T.rotation)], atol=1e-12)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(J, fd, atol=2e-6)
+        value = fw.Problem(robot, term).values(x[None])[0, 0]
+        assert value == pytest.approx(np.linalg.norm(r[:3]) + np.sin(min(np.linalg.norm(r[3:]), np.pi) / 2), abs=1e-13)
+    problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, -0.2, 0.4]) + term + 0.1 * fw.Motion("all", robot.middle))
+    result = fw.solve(problem, tolerance=1e-9)
+    assert result.success
+    T = robot.frame_placement(result.configuration, "arm1_ee").inverse() * robot.frame_placement(
+        result.configuration, "arm2_ee")
+    assert np.linalg.norm(T.translation - offset.translation) <= 1e-9
+    assert np.linalg.norm(pin.log3(offset.rotation.T @ T.rotation)) <= 1e-9
+
+
+def test_relative_pose_in_a_task_file(tmp_path):
+    from framework.taskfile import load_task
+
+    path = tmp_path / "hold.toml"
+    path.write_text("""
+[task]
+name = "hold a box"
+robot = "youbot_dual_mobile"
+[[terms]]
+type = "position"
+frame = "arm1_ee"
+target = [0.5, -0.2, 0.4]
+[[terms]]
+type = "relative_pose"
+frame_a = "arm1_ee"
+frame_b = "arm2_ee"
+offset = [0, 0.3, 0]
+offset_rotation = "Rz(pi)"
+[[terms]]
+type = "motion"
+group = "all"
+weight = 0.1
+""")
+    problem = load_task(path).cases[0].problem
+    result = fw.solve(problem, tolerance=1e-9)
+    robot = problem.robot
+    T = robot.frame_placement(result.configuration, "arm1_ee").inverse() * robot.frame_placement(
+        result.configuration, "arm2_ee")
+    assert result.success and np.allclose(T.translation, [0, 0.3, 0], atol=1e-9)
+    np.testing.assert_allclose(T.rotation, pin.utils.rotate("z", np.pi), atol=1e-9)

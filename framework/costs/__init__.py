@@ -9,7 +9,7 @@ from .orientation import Orientation, rotation_from
 from .pose import Pose, pose_from
 from .position import Position
 from .program import Block, Program
-from .relative import RelativePosition
+from .relative import RelativePose, RelativePosition
 
 __all__ = [
     "LEVELS",
@@ -25,6 +25,7 @@ __all__ = [
     "Pose",
     "Position",
     "Program",
+    "RelativePose",
     "RelativePosition",
     "Term",
     "check_weight",

@@ -16,6 +16,8 @@ kind            residual                                      Jacobian          
 ``AXIS``        ``Bᵀ θ/sinθ (d × R_a e)`` (2) [rad], norm = θ  see :func:`block_residual`  ``e, d, b₁, b₂`` (12)
 ``DISTANCE``    ``‖v‖ − hi`` above, ``‖v‖ − lo`` below, else 0 ``uᵀ ∂v`` outside the band   ``point, lo, hi`` (5)
 ``CONE``        ``θ − α`` when the axis is outside, else 0     ``∂θ`` outside the cone      ``e, d, α`` (7)
+``RELATIVE_LOCAL``  ``R_aᵀ(p_b − p_a) − o`` (3) [m]            ``R_aᵀ(∂v + v × ω_a)``      ``o`` (3)
+``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -23,7 +25,9 @@ kind            residual                                      Jacobian          
 of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free). ``DISTANCE``: ``v = p_a − p_b``
 (frame ``b``) or ``p_a −`` a point (no frame ``b``), held within ``[lo, hi]`` (one row, a hinge on each side).
 ``CONE``: the angle ``θ`` between ``R_a e`` and ``d`` held below ``α`` (one row, a hinge; its second order is
-left out: Gauss-Newton curvature in the Newton phase).
+left out: Gauss-Newton curvature in the Newton phase). ``RELATIVE_LOCAL`` / ``RELATIVE_ROTATION``: the pose of
+frame ``b`` in frame ``a`` against an offset ``(o, R_o)`` (two hands holding one object); their second order is
+left out too.
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -35,7 +39,7 @@ import numba
 import numpy as np
 
 # Block kinds
-POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE = 0, 1, 2, 3, 4, 5, 6, 7
+POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION = range(10)
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -161,6 +165,20 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
         axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == CONE:
         cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == RELATIVE_LOCAL:
+        v0, v1, v2 = out[fb, 9] - out[fa, 9], out[fb, 10] - out[fa, 10], out[fb, 11] - out[fa, 11]
+        for c in range(3):  # R_aᵀ v: column c of R_a (row-major) dotted with v
+            r[row + c] = out[fa, c] * v0 + out[fa, 3 + c] * v1 + out[fa, 6 + c] * v2 - params[p + c]
+        if want_jacobian:
+            for i in range(n):
+                o0, o1, o2 = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+                q0 = Jf[fb, 0, i] - Jf[fa, 0, i] + v1 * o2 - v2 * o1  # ∂v + v × ω_a
+                q1 = Jf[fb, 1, i] - Jf[fa, 1, i] + v2 * o0 - v0 * o2
+                q2 = Jf[fb, 2, i] - Jf[fa, 2, i] + v0 * o1 - v1 * o0
+                for c in range(3):
+                    Jr[row + c, i] = out[fa, c] * q0 + out[fa, 3 + c] * q1 + out[fa, 6 + c] * q2
+    elif kind == RELATIVE_ROTATION:
+        relative_rotation_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, L3, E9)
     elif kind == DISTANCE:
         u, dist = distance_direction(out, fa, fb, params, p)
         lo, hi = params[p + 3], params[p + 4]
@@ -250,6 +268,37 @@ def axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
         u2 = f * (d0 * e1 - d1 * e0) - g * dd * c2
         Jr[row, i] = params[p + 6] * u0 + params[p + 7] * u1 + params[p + 8] * u2
         Jr[row + 1, i] = params[p + 9] * u0 + params[p + 10] * u1 + params[p + 11] * u2
+
+
+@numba.njit(cache=True)
+def relative_rotation_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, L3, E9) -> None:
+    """``r = log(Mᵀ R_b)``, ``M = R_a R_o``; Jacobian ``J_l⁻¹(r) Mᵀ (ω_b − ω_a)`` (a left perturbation of
+    ``Mᵀ R_b`` by the relative angular velocity, exact to first order)."""
+    for a in range(3):
+        for c in range(3):  # E = Mᵀ R_b, M[k, a] = Σ_m R_a[k, m] R_o[m, a]
+            e = 0.0
+            for k in range(3):
+                m = out[fa, 3 * k] * params[p + a] + out[fa, 3 * k + 1] * params[p + 3 + a] \
+                    + out[fa, 3 * k + 2] * params[p + 6 + a]
+                e += m * out[fb, 3 * k + c]
+            E9[3 * a + c] = e
+    rotation_log(E9, r[row : row + 3])
+    if not want_jacobian:
+        return
+    left_jacobian_inverse(r[row : row + 3], L3)
+    for k in range(3):  # E9 ← M (row-major)
+        for a in range(3):
+            E9[3 * k + a] = out[fa, 3 * k] * params[p + a] + out[fa, 3 * k + 1] * params[p + 3 + a] \
+                + out[fa, 3 * k + 2] * params[p + 6 + a]
+    for i in range(n):
+        u0 = Jf[fb, 3, i] - Jf[fa, 3, i]
+        u1 = Jf[fb, 4, i] - Jf[fa, 4, i]
+        u2 = Jf[fb, 5, i] - Jf[fa, 5, i]
+        m0 = E9[0] * u0 + E9[3] * u1 + E9[6] * u2  # Mᵀ u
+        m1 = E9[1] * u0 + E9[4] * u1 + E9[7] * u2
+        m2 = E9[2] * u0 + E9[5] * u1 + E9[8] * u2
+        for a in range(3):
+            Jr[row + a, i] = L3[a, 0] * m0 + L3[a, 1] * m1 + L3[a, 2] * m2
 
 
 @numba.njit(cache=True)
@@ -355,7 +404,7 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
     ``½ ω_i × ω_j`` (zero on the diagonal) — exact for positions, exact for orientations on the target (``r = 0``).
     """
     kind = bint[b, KIND]
-    if kind == COORDINATES or kind == LIMITS or kind == CONE:
+    if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION:
         return
     if kind == ORIENTATION:
         p, fa = bint[b, PPTR], bint[b, FA]
