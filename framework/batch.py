@@ -111,7 +111,8 @@ def solve_batch(
     kwargs = dict(tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
                   max_iterations=max_iterations)
     if scheduler is not None:
-        return _on_cluster(problem, targets, solver, seeds, initial, options, kwargs, scheduler, workers, started)
+        return _on_cluster(problem, targets, solver, seeds, initial, options, kwargs, scheduler, workers, started,
+                           progress)
     template = make_request(problem, initial=None if initial is None else initial[:1], **kwargs)
     method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
     program = problem.program
@@ -179,18 +180,22 @@ def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan,
 
 
 def _on_cluster(problem: Problem, targets, solver, seeds: np.ndarray, initial, options, kwargs: dict,
-                scheduler: str, workers: int | None, started: float) -> BatchResult:
-    """:func:`solve_batch` with the items split into chunks over a Dask cluster's workers."""
+                scheduler: str, workers: int | None, started: float, progress: bool | None) -> BatchResult:
+    """:func:`solve_batch` with the items split into chunks over a Dask cluster's workers (the progress bar
+    advances as chunks come back)."""
     from .cluster import cluster_client, completed
 
     columns = {name: column for name, (_, column) in _targeted(problem, targets).items()}
     B = len(seeds)
-    with cluster_client(scheduler, workers) as client:
+    parts = {}
+    with cluster_client(scheduler, workers) as client, _Bar(progress, B, "batch IK on the cluster") as bar:
         count = max(1, len(client.scheduler_info()["workers"]))
         size = max(1, -(-B // (4 * count)))
         chunks = [np.arange(a, min(a + size, B)) for a in range(0, B, size)]
-        parts = {k: part for k, part in completed(client, _cluster_chunk, chunks, problem, columns, solver, seeds,
-                                                    initial, options, kwargs)}
+        for k, part in completed(client, _cluster_chunk, chunks, problem, columns, solver, seeds, initial, options,
+                                 kwargs):
+            parts[k] = part
+            bar.advance(len(chunks[k]))
     merged = [np.concatenate([getattr(parts[k], field) for k in range(len(chunks))])
               for field in ("configurations", "success", "errors", "costs", "iterations", "compiled")]
     first = parts[0] if parts else None
