@@ -435,21 +435,13 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
         a0 = mu[0] * params[p + 6] + mu[1] * params[p + 9]
         a1 = mu[0] * params[p + 7] + mu[1] * params[p + 10]
         a2 = mu[0] * params[p + 8] + mu[1] * params[p + 11]
-        m0, m1, m2 = a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0
-        lo, hi = chain_ptr[fa], chain_ptr[fa + 1]
-        for s in range(lo, hi):
-            i = chain_idx[s]
-            wx, wy, wz = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
-            if wx == 0.0 and wy == 0.0 and wz == 0.0:
-                continue
-            for t in range(s, hi):
-                j = chain_idx[t]
-                vx, vy, vz = Jf[fa, 3, j], Jf[fa, 4, j], Jf[fa, 5, j]
-                q0, q1, q2 = vy * w2 - vz * w1, vz * w0 - vx * w2, vx * w1 - vy * w0  # ω_j × w
-                h = (m0 * (wy * q2 - wz * q1) + m1 * (wz * q0 - wx * q2) + m2 * (wx * q1 - wy * q0))
-                H[i, j] += h
-                if j != i:
-                    H[j, i] += h
+        n = H.shape[0]
+        dw = np.empty((3, n))  # ∂w/∂x_j = ω_j × w: the axis moves like a point at w
+        for j in range(n):
+            vx, vy, vz = Jf[fa, 3, j], Jf[fa, 4, j], Jf[fa, 5, j]
+            dw[0, j], dw[1, j], dw[2, j] = vy * w2 - vz * w1, vz * w0 - vx * w2, vx * w1 - vy * w0
+        _chain_curvature(fa, a1 * d2 - a2 * d1, a2 * d0 - a0 * d2, a0 * d1 - a1 * d0, dw, Jf, chain_ptr, chain_idx,
+                         H)
         return
     if kind == DISTANCE:  # r = ‖v‖ − bound when outside the band: μ[Dᵀ(I − uuᵀ)D/‖v‖ + Σ u_c ∇²v_c], D = ∂v
         p, fa, fb = bint[b, PPTR], bint[b, FA], bint[b, FB]
@@ -484,6 +476,14 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
 @numba.njit(cache=True)
 def _position_curvature(f, m0, m1, m2, Jf, chain_ptr, chain_idx, H) -> None:
     """Add ``m·∂²p_f/∂x_i∂x_j`` (``∂²p/∂x_i∂x_j = ω_i × J_j`` for ``i`` before ``j``) to ``H``."""
+    _chain_curvature(f, m0, m1, m2, Jf[f, 0:3], Jf, chain_ptr, chain_idx, H)
+
+
+@numba.njit(cache=True)
+def _chain_curvature(f, m0, m1, m2, V, Jf, chain_ptr, chain_idx, H) -> None:
+    """Add ``m·(ω_i × V_j)`` to ``H[i, j]`` (and ``H[j, i]``) for ``i`` before or at ``j`` on frame ``f``'s chain:
+    the second derivative of a vector attached to the frame whose first derivatives are the columns ``V (3, n)``
+    (a point's position Jacobian, or ``ω_j × w`` for an axis ``w``)."""
     lo, hi = chain_ptr[f], chain_ptr[f + 1]
     for s in range(lo, hi):
         i = chain_idx[s]
@@ -492,7 +492,7 @@ def _position_curvature(f, m0, m1, m2, Jf, chain_ptr, chain_idx, H) -> None:
             continue
         for t in range(s, hi):
             j = chain_idx[t]
-            vx, vy, vz = Jf[f, 0, j], Jf[f, 1, j], Jf[f, 2, j]
+            vx, vy, vz = V[0, j], V[1, j], V[2, j]
             h = m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx)
             H[i, j] += h
             if j != i:
