@@ -28,7 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import report  # noqa: E402
-from pose_ik import BUDGET, TOLERANCE, Chain, chains, find_tracik, run_tracik  # noqa: E402
+from pose_ik import (BUDGET, TOLERANCE, Chain, chains, find_tracik, row_pose, run_tracik, strict_errors,  # noqa: E402
+                     tracik_strict)
 
 import framework as fw  # noqa: E402
 
@@ -40,22 +41,13 @@ RUNS = 3
 def poses_of(chain: Chain, robot: fw.Robot, rows: list[dict]) -> np.ndarray:
     """``(B, 4, 4)`` the driver's poses in the model's world frame."""
     base = robot.frame_placement(robot.middle, chain.base)
-    out = np.empty((len(rows), 4, 4))
-    for k, row in enumerate(rows):
-        local = pin.SE3(np.array([[float(row[f"R{a}{b}"]) for b in range(3)] for a in range(3)]),
-                        np.array([float(row[c]) for c in ("px", "py", "pz")]))
-        out[k] = (base * local).homogeneous
-    return out
+    return np.array([(base * row_pose(row)).homogeneous for row in rows]).reshape(len(rows), 4, 4)
 
 
 def strict(robot: fw.Robot, tip: str, X: np.ndarray, T: np.ndarray) -> np.ndarray:
     """``(B,)`` whether each configuration reaches its pose within 1e-5 m and 1e-5 rad (Pinocchio FK)."""
-    ok = np.empty(len(X), dtype=bool)
-    for k, (x, target) in enumerate(zip(X, T)):
-        M = robot.frame_placement(x, tip)
-        ok[k] = (np.linalg.norm(M.translation - target[:3, 3]) <= TOLERANCE
-                 and np.linalg.norm(pin.log3(target[:3, :3].T @ M.rotation)) <= TOLERANCE)
-    return ok
+    return np.array([max(strict_errors(robot, x, tip, pin.SE3(target))) <= TOLERANCE for x, target in zip(X, T)],
+                    dtype=bool)
 
 
 def batch_run(problem: fw.Problem, T: np.ndarray, workers: int) -> tuple[float, np.ndarray]:
@@ -98,12 +90,8 @@ def measure(chain: Chain, robot: fw.Robot, T: np.ndarray, rows: list[dict], work
             lines.append({"chain": chain.name, "B": B, "method": name, "rate": B / float(np.median(times[name])),
                           "success": 100 * strict(robot, chain.tip, solutions[name], subset).mean()})
         ms = np.array([float(r["ms"]) for r in rows[:B]])
-        theirs = np.array([tuple(float(r[f"sol{j}"]) for j in range(robot.n)) for r in rows[:B]])
         order = np.array([robot.joint(name).index for name in chain.meta["joints"]])
-        X = np.empty((B, robot.n))
-        X[:, order] = theirs
-        ok = strict(robot, chain.tip, X, subset) & (ms <= 1e3 * BUDGET) & np.array(
-            [int(r["rc"]) >= 0 for r in rows[:B]])
+        ok = np.array([tracik_strict(robot, chain, r, order, pin.SE3(t)) for r, t in zip(rows[:B], subset)])
         lines.append({"chain": chain.name, "B": B, "method": "TRAC-IK one by one (C++)",
                       "rate": B / (ms.sum() / 1e3), "success": 100 * ok.mean()})
         for line in lines[-4:]:

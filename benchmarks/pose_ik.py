@@ -102,26 +102,33 @@ def strict_errors(robot: fw.Robot, x: np.ndarray, tip: str, target: pin.SE3) -> 
         np.linalg.norm(pin.log3(target.rotation.T @ M.rotation)))
 
 
+def row_pose(row: dict) -> pin.SE3:
+    """The pose of a driver row, in the chain's base frame."""
+    return pin.SE3(np.array([[float(row[f"R{a}{b}"]) for b in range(3)] for a in range(3)]),
+                   np.array([float(row[c]) for c in ("px", "py", "pz")]))
+
+
+def tracik_strict(robot: fw.Robot, chain: Chain, row: dict, order: np.ndarray, target: pin.SE3) -> bool:
+    """Whether TRAC-IK's answer in a driver row is a strict success: found, within the tolerances by Pinocchio FK
+    of the model, within the budget."""
+    solution = np.empty(robot.n)
+    solution[order] = [float(row[f"sol{j}"]) for j in range(len(chain.meta["joints"]))]
+    dp, da = strict_errors(robot, solution, chain.tip, target)
+    return int(row["rc"]) >= 0 and dp <= TOLERANCE and da <= TOLERANCE and float(row["ms"]) <= 1e3 * BUDGET
+
+
 def solve_chunk(chain: Chain, robot: fw.Robot, rows: list[dict], base: pin.SE3, order: np.ndarray) -> None:
-    n = len(chain.meta["joints"])
     ours, theirs = chain.results.setdefault("metaik", {}), chain.results.setdefault("TRAC-IK", {})
     for row in rows:
         k = int(row["i"])
-        local = pin.SE3(np.array([[float(row[f"R{a}{b}"]) for b in range(3)] for a in range(3)]),
-                        np.array([float(row[c]) for c in ("px", "py", "pz")]))
-        target = base * local  # the pose in the model's world frame
+        target = base * row_pose(row)  # the pose in the model's world frame
         t, c = time.perf_counter(), time.process_time()
         result = fw.solve(fw.Problem(robot, fw.Pose(chain.tip, target)), tolerance=TOLERANCE, time_budget=BUDGET,
                           seed=k)
         wall, cpu = time.perf_counter() - t, time.process_time() - c
         dp, da = strict_errors(robot, result.configuration, chain.tip, target)
         record(ours, dp <= TOLERANCE and da <= TOLERANCE and wall <= BUDGET, 1e3 * wall, 1e3 * cpu)
-        solution = np.empty(robot.n)
-        solution[order] = [float(row[f"sol{j}"]) for j in range(n)]
-        dp, da = strict_errors(robot, solution, chain.tip, target)
-        ms = float(row["ms"])
-        ok = int(row["rc"]) >= 0 and dp <= TOLERANCE and da <= TOLERANCE and ms <= 1e3 * BUDGET
-        record(theirs, ok, ms, float(row["cpu_ms"]))
+        record(theirs, tracik_strict(robot, chain, row, order, target), float(row["ms"]), float(row["cpu_ms"]))
         theirs.setdefault("own", []).append(int(row["own_success"]))
 
 
