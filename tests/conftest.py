@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sysconfig
 from pathlib import Path
 
@@ -29,3 +30,13 @@ def erd() -> Path:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261123)
+
+
+def same_framework_env(**extra: str) -> dict[str, str]:
+    """The environment of a child process (a CLI run, a notebook kernel) that imports the framework this test
+    process imports: its numba cache is warm, so the child does not compile the engine again."""
+    import framework
+
+    root = str(Path(framework.__file__).resolve().parents[1])
+    return {**os.environ, **extra, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+

@@ -28,6 +28,7 @@ from framework.bench import (
 from framework.errors import TaskError
 from framework.resources import data_dir
 from framework.stats import sign_rows, summary_rows
+from tests.conftest import same_framework_env
 
 SMALL = """
 [task]
@@ -323,17 +324,12 @@ def test_a_second_bench_on_the_same_file_is_refused_and_duplicates_count_once(sm
 
 def test_killing_the_bench_ends_its_workers(small, tmp_path):
     """SIGKILL of a `metaik bench -j 2` process: its worker processes end too (none left holding its stdout)."""
-    import os
-    import signal
     import subprocess
     import sys
     import time
     from pathlib import Path
 
-    import framework as fw
-
-    root = str(Path(fw.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    env = same_framework_env()
     slow = small.read_text().replace("max_iterations = 15", "max_iterations = 3000").replace("runs = 3", "runs = 30")
     small.write_text(slow)
     bench = subprocess.Popen([sys.executable, "-m", "framework.cli", "bench", str(small), "-j", "2", "--out",

@@ -7,6 +7,7 @@ import pytest
 import framework as fw
 from framework.cli import EXIT_INPUT, main
 from framework.errors import LimitsError, TaskError, UnknownJointError
+from tests.conftest import same_framework_env
 
 
 @pytest.mark.parametrize("kwargs, error, message", [
@@ -74,16 +75,11 @@ def test_ctrl_c_in_a_multi_case_run_stops_it_and_is_never_success(tmp_path):
     import sys
     import time
 
-    import os
-    from pathlib import Path
-
     from framework.taskfile import load_task, resolve_task
 
     case = load_task(resolve_task("youbot_dual_coordinated_ik")).cases[0]
     fw.solve(case.problem, "cmaes", max_iterations=2)  # compiles what the run needs (numba's cache is shared)
-    root = str(Path(fw.__file__).resolve().parents[1])  # this process's framework: the same cache
-    env = {**os.environ, "PYTHONUNBUFFERED": "1",
-           "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    env = same_framework_env(PYTHONUNBUFFERED="1")  # this process's framework: the same cache
     process = subprocess.Popen([sys.executable, "-m", "framework.cli", "run", "youbot_dual_coordinated_ik",
                                 "--solver", "cmaes", "--iterations", "200000"], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
+
+from tests.conftest import same_framework_env
 
 
 def _require_jupyter() -> None:
@@ -58,12 +59,7 @@ def test_notebook_runs(path, tmp_path):
         kernel_name="python3",
         resources={"metadata": {"path": str(tmp_path)}},
     )
-    # the kernel imports the framework this test process imports (its numba cache is warm: no second compile)
-    import framework
-
-    package_root = str(Path(framework.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (package_root, os.environ.get("PYTHONPATH")) if p)}
-    client.execute(env=env)
+    client.execute(env=same_framework_env())  # the kernel imports this process's framework: its cache is warm
     errors = [
         o for c in notebook.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"
     ]

@@ -7,6 +7,7 @@ import pytest
 
 import framework as fw
 from framework import trajectory as tr
+from tests.conftest import same_framework_env
 from framework.cli import EXIT_INPUT, EXIT_MISSED, EXIT_OK, main
 from framework.resources import data_dir
 from framework.taskfile import load_task
@@ -161,10 +162,8 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint(tmp_path):
     import subprocess
     import sys
     import time
-    from pathlib import Path
 
-    root = str(Path(fw.__file__).resolve().parents[1])  # this process's framework: its numba cache is warm
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    env = same_framework_env()  # this process's framework: its numba cache is warm
     killed, full = tmp_path / "killed.csv", tmp_path / "full.csv"
     command = [sys.executable, "-m", "framework.cli", "run", "paper000_sinusoidal", "--solver", "cmaes",
                "--points", "60", "--no-progress", "--output"]
