@@ -21,6 +21,8 @@ import numba
 import numpy as np
 
 from framework.errors import LimitsError, SolverError
+from framework.interrupts import graceful_interrupt
+from framework.solvers.ik import positive_int
 
 BOUNDS_MODES = ("resample", "clip", "none")
 STOP_REASONS = ("max_iterations", "f_target", "stagnation", "max_evaluations", "callback", "interrupted")
@@ -30,6 +32,9 @@ IMPROVEMENT_RTOL = 1e-15
 
 PopulationCost = Callable[[np.ndarray], np.ndarray]
 Callback = Callable[[int, float, np.ndarray], "bool | None"]
+
+#: Largest population a solver accepts (its work arrays are population x n floats, several of them).
+MAX_POPULATION = 100_000
 
 
 @dataclass(frozen=True)
@@ -188,9 +193,10 @@ class Algorithm(ABC):
     ) -> None:
         if box.n != n:
             raise LimitsError(f"Box has dimension {box.n}, the problem has {n}.")
-        if int(population) != population or population < self.MIN_POPULATION:
+        if int(population) != population or not self.MIN_POPULATION <= population <= MAX_POPULATION:
             raise SolverError(
-                f"{self.name}: population must be an integer >= {self.MIN_POPULATION}, got {population}."
+                f"{self.name}: population must be an integer in [{self.MIN_POPULATION}, {MAX_POPULATION:,}], "
+                f"got {population}."
             )
         self.n = n
         self.box = box
@@ -284,7 +290,11 @@ def check_initial(initial: np.ndarray | None, n: int) -> np.ndarray | None:
 
 
 def _as_box(box: Box | tuple[np.ndarray, np.ndarray]) -> Box:
-    return box if isinstance(box, Box) else Box(*box)
+    if isinstance(box, Box):
+        return box
+    if not isinstance(box, (tuple, list)) or len(box) != 2:
+        raise LimitsError(f"the search box must be a Box or a (lower, upper) pair; got {box!r}")
+    return Box(*box)
 
 
 def _evaluate(cost: PopulationCost, X: np.ndarray) -> np.ndarray:
@@ -377,12 +387,9 @@ def minimize(
         raise SolverError(f"rng must be a numpy.random.Generator, got {type(rng).__name__}.")
     if bounds not in BOUNDS_MODES:
         raise SolverError(f"Unknown bounds mode {bounds!r}; use one of {list(BOUNDS_MODES)}.")
-    if int(max_iterations) != max_iterations or max_iterations < 1:
-        raise SolverError(f"max_iterations must be a positive integer, got {max_iterations}.")
-    if stagnation is not None and stagnation < 1:
-        raise SolverError(f"stagnation must be None or a positive integer, got {stagnation}.")
-    if max_evaluations is not None and max_evaluations < 1:
-        raise SolverError(f"max_evaluations must be None or a positive integer, got {max_evaluations}.")
+    max_iterations = positive_int(max_iterations, "max_iterations")
+    stagnation = None if stagnation is None else positive_int(stagnation, "stagnation")
+    max_evaluations = None if max_evaluations is None else positive_int(max_evaluations, "max_evaluations")
     algorithm = get_solver(solver)(
         box.n, box, population, rng, options, initial, max_iterations=int(max_iterations)
     )
@@ -394,41 +401,45 @@ def minimize(
     stale = 0
     stop_reason = "max_iterations"
     report_every = max(1, int(max_iterations) // 20)
-    try:
-        for iteration in range(1, int(max_iterations) + 1):
-            previous_f = best_f
-            while True:
-                X = repair(np.asarray(algorithm.ask(), dtype=float), box, rng, bounds)
-                F = _evaluate(cost, X)
-                evaluations += X.shape[0]
-                i = int(np.argmin(F))
-                if F[i] < best_f:
-                    best_f, best_x = float(F[i]), X[i].copy()
-                algorithm.tell(X, F)
-                budget_spent = max_evaluations is not None and evaluations >= max_evaluations
-                if (
-                    algorithm.iteration_complete
-                    or budget_spent
-                    or (f_target is not None and best_f <= f_target)
-                ):
-                    break
-            history.append(best_f)
-            stale = 0 if _improved(previous_f, best_f) else stale + 1
-            if progress and (iteration % report_every == 0 or iteration == 1):
-                _print_progress(iteration, int(max_iterations), best_f, evaluations)
-            if f_target is not None and best_f <= f_target:
-                stop_reason = "f_target"
-            elif budget_spent:
-                stop_reason = "max_evaluations"
-            elif stagnation is not None and stale >= stagnation:
-                stop_reason = "stagnation"
-            elif callback is not None and callback(iteration, best_f, best_x.copy()):
-                stop_reason = "callback"
-            else:
-                continue
-            break
-    except KeyboardInterrupt:
-        stop_reason = "interrupted"
+    with graceful_interrupt() as interrupt:  # Ctrl-C is checked after each batch: pycma swallows exceptions
+        try:
+            for iteration in range(1, int(max_iterations) + 1):
+                previous_f = best_f
+                while True:
+                    X = repair(np.asarray(algorithm.ask(), dtype=float), box, rng, bounds)
+                    F = _evaluate(cost, X)
+                    evaluations += X.shape[0]
+                    i = int(np.argmin(F))
+                    if F[i] < best_f:
+                        best_f, best_x = float(F[i]), X[i].copy()
+                    algorithm.tell(X, F)
+                    budget_spent = max_evaluations is not None and evaluations >= max_evaluations
+                    if (
+                        algorithm.iteration_complete
+                        or budget_spent
+                        or (f_target is not None and best_f <= f_target)
+                        or interrupt.requested
+                    ):
+                        break
+                history.append(best_f)
+                stale = 0 if _improved(previous_f, best_f) else stale + 1
+                if progress and (iteration % report_every == 0 or iteration == 1):
+                    _print_progress(iteration, int(max_iterations), best_f, evaluations)
+                if interrupt.requested:
+                    stop_reason = "interrupted"
+                elif f_target is not None and best_f <= f_target:
+                    stop_reason = "f_target"
+                elif budget_spent:
+                    stop_reason = "max_evaluations"
+                elif stagnation is not None and stale >= stagnation:
+                    stop_reason = "stagnation"
+                elif callback is not None and callback(iteration, best_f, best_x.copy()):
+                    stop_reason = "callback"
+                else:
+                    continue
+                break
+        except KeyboardInterrupt:  # the second Ctrl-C
+            stop_reason = "interrupted"
 
     settings = {
         "solver": solver,

@@ -1,0 +1,41 @@
+"""Ctrl-C as a request that loops check between steps, so it never lands inside library code that swallows it
+(pycma has bare ``except:`` clauses): the first SIGINT sets a flag, a second one raises ``KeyboardInterrupt``."""
+
+from __future__ import annotations
+
+import signal
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+
+class Interrupt:
+    """SIGINT handler: the first signal sets ``requested`` (finish the step in flight, then stop); a second
+    raises ``KeyboardInterrupt`` at once."""
+
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum, frame) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+
+@contextmanager
+def graceful_interrupt() -> Iterator[Interrupt]:
+    """Route SIGINT to an :class:`Interrupt` for the block. Nested blocks share the outer one (a bench stopping
+    a solve stops the bench too); outside the main thread signals cannot be caught and the flag stays unset."""
+    current = signal.getsignal(signal.SIGINT)
+    if isinstance(current, Interrupt):
+        yield current
+        return
+    flag = Interrupt()
+    try:
+        previous = signal.signal(signal.SIGINT, flag)
+    except ValueError:  # not the main thread: no signal handling
+        yield flag
+        return
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
