@@ -336,3 +336,38 @@ class _Console:
 
     def print(self, text, **kwargs):
         self.lines.append(str(text))
+
+
+def test_a_torn_recording_reads_up_to_its_last_complete_message(run_file, tmp_path):
+    """A file cut anywhere (a writer killed mid-write) reads back as a prefix of the whole recording: the
+    solutions it holds are the first ones of the whole file, more of them the later the cut, and it says where
+    it stops; replay opens the intact part."""
+    from framework.recording import intact_messages, repair_recording
+
+    data = run_file.read_bytes()
+    whole = read_recording(run_file)
+    _, X_whole, _ = whole.configurations("solution")
+    assert whole.torn is None and intact_messages(data)[2] is None
+    end, messages, _ = intact_messages(data)
+    recovered_counts = []
+    for fraction in np.linspace(0.01, 0.9999, 40):
+        cut = tmp_path / "cut.rrd"
+        cut.write_bytes(data[: int(len(data) * fraction)])
+        try:
+            rec = read_recording(cut)
+        except RecordingError as err:  # cut inside the first message: nothing to recover, and it says so
+            assert fraction < 0.05 and "not a readable" in str(err)
+            recovered_counts.append(0)
+            continue
+        assert rec.torn is not None and not rec.complete
+        try:
+            _, X, _ = rec.configurations("solution")
+        except RecordingError:  # cut before the coordinate names were written
+            X = np.zeros((0, X_whole.shape[1]))
+        np.testing.assert_array_equal(X, X_whole[: len(X)])
+        recovered_counts.append(len(X))
+        repaired = tmp_path / "repaired.rrd"
+        assert repair_recording(cut, repaired) == rec.torn
+        assert read_recording(repaired).entities == rec.entities
+    assert recovered_counts == sorted(recovered_counts) and recovered_counts[-1] == len(X_whole)
+    assert 0 < messages and end < len(data)

@@ -1,50 +1,18 @@
-"""Recordings of runs in rerun (``.rrd``): the robot posed for every solution, targets, paths, costs.
-
-One :class:`Recorder` writes one file per run and flushes after every logged solution, so a run that crashes
-still leaves a readable file of what it solved. What a recording holds (entity paths, timelines)::
-
-    world/robot/skeleton            links as line segments between frame origins    timeline solution / waypoint
-    world/robot/configuration       joint values (and, static, the coordinate names) timeline solution / waypoint
-    world/robot/joints              joint origins (points)
-    world/robot/frames/<frame>      end-effector axes (Transform3D + TransformAxes3D)
-    world/robot/visuals/<k>_<link>  the URDF's meshes and primitives (static), posed by a Transform3D
-    world/targets                   target points of the position / relative-position terms
-    world/paths/desired/<frame>     desired end-effector paths (tracking)
-    world/paths/tracked/<frame>     end-effector paths the joint path really draws (tracking)
-    solutions/<name>/cost           best cost after each solver iteration            timeline iteration
-    solutions/<name>/terms/<term>   unweighted terms: final values, or every iteration with term_logger()
-    solutions/<name>/settings       solver, settings and result as a markdown TextDocument (static)
-    summary/task_error, summary/cost                                                 timeline solution
-    tracking/<name>/<error>         per-point errors along a tracked path             timeline waypoint
-    robot, description, task        the robot, the run and the task file as markdown (static)
-
-Recording a task file's run as it goes::
-
-    with Recorder.for_task("run.rrd", task) as recorder:
-        for case in task.cases:
-            recorder.log_case(case, solve(case.problem, "hybrid"))    # or a track(...) result
-
-:func:`replay` opens a file in the rerun viewer (``metaik replay run.rrd``); :func:`read_recording` reads one
-back with rerun's own reader, for scripts and tests. The robot is drawn as :class:`framework.viewer.RobotDrawing`
-draws it: links as segments between frame origins, plus the URDF's meshes where their files resolve locally
-(nothing is ever downloaded).
-"""
+"""Writing recordings: :class:`Recorder` (one ``.rrd`` per run, flushed after every solution or waypoint),
+:func:`record_solve`, :func:`record_task`."""
 
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .errors import RecordingError
-from .viewer import (
+from ..errors import RecordingError
+from ..viewer import (
     DESIRED_COLOR,
     JOINT_COLOR,
     LINK_COLOR,
@@ -55,13 +23,11 @@ from .viewer import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
-    import argparse
-
-    from .problem import Problem
-    from .robot import Robot
-    from .solve import IKResult
-    from .taskfile import Case, TaskFile
-    from .tracking import TrackingResult
+    from ..problem import Problem
+    from ..robot import Robot
+    from ..solve import IKResult
+    from ..taskfile import Case, TaskFile
+    from ..tracking import TrackingResult
 
 #: Mesh formats rerun's Asset3D reads directly; others (Collada .dae, ...) are converted with trimesh.
 ASSET_FORMATS = {
@@ -513,7 +479,7 @@ class Recorder:
 
 def _desired_paths(robot: Robot, tracking: TrackingResult, task: Any) -> dict[str, np.ndarray]:
     """Frame -> desired positions ``(k, 3)`` along a tracked path, from the objective of every waypoint."""
-    from .tracking import TrackingTask
+    from ..tracking import TrackingTask
 
     builder = task
     if not callable(task):
@@ -603,170 +569,3 @@ def record_task(
         for case, result in results:
             recorder.log_case(case, result)
     return Path(path)
-
-
-# ---------------------------------------------------------------------------------------------- reading
-@dataclass(frozen=True)
-class Recording:
-    """A recording read back with rerun's own reader (:class:`rerun.chunk.RrdReader`).
-
-    Attributes:
-        path: the file.
-        complete: False when the file has no footer (its writer did not close it, e.g. it crashed).
-        entities: entity paths holding data (``"/world/robot/skeleton"``, ...).
-        timelines: every timeline of the recording (``"solution"``, ``"iteration"``, ``"waypoint"``).
-    """
-
-    path: Path
-    complete: bool
-    entities: tuple[str, ...]
-    timelines: frozenset[str]
-    _batches: dict[str, list] = field(repr=False, default_factory=dict)
-
-    def _rows(self, entity: str) -> list:
-        entity = entity if entity.startswith("/") else f"/{entity}"
-        if entity not in self._batches:
-            raise RecordingError(
-                f"{self.path} has no entity {entity!r}; entities: {', '.join(self.entities)}"
-            )
-        return self._batches[entity]
-
-    def components(self, entity: str) -> tuple[str, ...]:
-        """Component columns logged at ``entity`` (``"Scalars:scalars"``, ``"LineStrips3D:strips"``, ...)."""
-        names = {n for batch in self._rows(entity) for n in batch.schema.names}
-        return tuple(sorted(n for n in names if ":" in n and not n.startswith("rerun.")))
-
-    def values(self, entity: str, component: str, timeline: str | None = None) -> tuple[np.ndarray, list]:
-        """Times on ``timeline`` and logged values of one component, sorted by time.
-
-        With ``timeline=None`` only static values are returned (times are then all ``-1``).
-        """
-        times, values = [], []
-        for batch in self._rows(entity):
-            names = batch.schema.names
-            if component not in names:
-                continue
-            if timeline is None:
-                if any(n in self.timelines for n in names):
-                    continue
-                t = np.full(batch.num_rows, -1)
-            elif timeline in names:
-                t = np.asarray(batch.column(timeline).to_pylist())
-            else:
-                continue
-            times.append(t)
-            values += batch.column(component).to_pylist()
-        if not times:
-            return np.zeros(0, dtype=int), []
-        t = np.concatenate(times)
-        order = np.argsort(t, kind="stable")
-        return t[order], [values[i] for i in order]
-
-    def scalars(self, entity: str, timeline: str) -> tuple[np.ndarray, np.ndarray]:
-        """``(times, values)`` of a scalar series (one scalar per row) on ``timeline``."""
-        t, v = self.values(entity, "Scalars:scalars", timeline)
-        return t, np.array([row[0] for row in v], dtype=float)
-
-    def count(self, entity: str, timeline: str, component: str | None = None) -> int:
-        """Number of rows logged at ``entity`` on ``timeline`` (e.g. the number of poses of the robot)."""
-        component = component or self.components(entity)[0]
-        return len(self.values(entity, component, timeline)[0])
-
-    def configurations(self, timeline: str) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
-        """``(times, X (K, n), coordinate names)``: the joint values recorded on ``timeline`` (``"solution"`` or
-        ``"waypoint"``), as solved — to replay them on the model, reload or continue a run."""
-        entity = "/world/robot/configuration"
-        _, names = self.values(entity, "coordinate_names")
-        if not names:
-            raise RecordingError(f"{self.path} holds no joint values (recorded before they were)")
-        times, rows = self.values(entity, "joint_values", timeline)
-        X = np.array(rows, dtype=float).reshape(len(rows), len(names[-1]))
-        return times, X, tuple(names[-1])
-
-    def text(self, entity: str) -> str:
-        """The (last) text of a static TextDocument."""
-        _, values = self.values(entity, "TextDocument:text")
-        if not values:
-            raise RecordingError(f"{entity} holds no text document")
-        return values[-1][0]
-
-
-def read_recording(path: str | Path) -> Recording:
-    """Read a ``.rrd`` file back: its entities, timelines and every logged value (see :class:`Recording`)."""
-    from rerun.chunk import RrdReader
-
-    path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"recording {path} does not exist")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        try:
-            chunks = RrdReader(path).stream().to_chunks()
-        except Exception as err:  # rerun raises ValueError / OSError on files that are not recordings
-            raise RecordingError(f"{path} is not a readable rerun recording: {err}") from err
-    complete = not any("footer" in str(w.message) for w in caught)
-    batches: dict[str, list] = {}
-    timelines: set[str] = set()
-    for chunk in chunks:
-        if chunk.entity_path.startswith("/__"):
-            continue
-        batches.setdefault(chunk.entity_path, []).append(chunk.to_record_batch())
-        timelines.update(chunk.timeline_names)
-    return Recording(path, complete, tuple(sorted(batches)), frozenset(timelines), batches)
-
-
-# ---------------------------------------------------------------------------------------------- replay
-def replay_command_line(path: str | Path) -> list[str]:
-    """The command that opens ``path`` in the rerun viewer (the viewer binary ships with rerun-sdk)."""
-    return [sys.executable, "-m", "rerun", str(path)]
-
-
-def replay(path: str | Path, *, wait: bool = False) -> subprocess.Popen:
-    """Open a recording in the rerun viewer (a separate process); ``wait=True`` blocks until it closes."""
-    path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"recording {path} does not exist")
-    try:
-        process = subprocess.Popen(replay_command_line(path))
-    except OSError as err:
-        raise RecordingError(f"cannot start the rerun viewer: {err}") from err
-    if wait:
-        process.wait()
-    return process
-
-
-def add_replay_command(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Add ``replay FILE.rrd [--summary]`` to the CLI's subparsers; dispatch to :func:`replay_command`."""
-    parser = subparsers.add_parser("replay", help="open a recording (.rrd) in the rerun viewer")
-    parser.add_argument("recording", help="a .rrd file written by `metaik run --record`")
-    parser.add_argument(
-        "--summary", action="store_true", help="print what the recording holds instead of opening the viewer"
-    )
-    return parser
-
-
-def replay_command(args: argparse.Namespace, console: Any) -> int:
-    """``metaik replay``: open the viewer (exit 0), or print a summary with ``--summary``."""
-    recording = read_recording(args.recording)
-    if not args.summary:
-        console.print(
-            f"opening {recording.path} in the rerun viewer: {' '.join(replay_command_line(recording.path))}"
-        )
-        replay(recording.path)
-        return 0
-    console.print(
-        f"{recording.path}: {len(recording.entities)} entities, timelines "
-        f"{', '.join(sorted(recording.timelines))}{'' if recording.complete else ' (incomplete file)'}"
-    )
-    if "/summary/task_error" in recording.entities:
-        _, errors = recording.scalars("/summary/task_error", "solution")
-        _, names = recording.values("/summary/name", "TextDocument:text", "solution")
-        for name, error in zip(names, errors):
-            console.print(f"  {name[0]}: task error {error:.3e}")
-    for entity in recording.entities:
-        if entity.startswith("/tracking/") and "settings" not in entity:
-            _, values = recording.scalars(entity, "waypoint")
-            console.print(
-                f"  {entity}: {len(values)} waypoints, mean {values.mean():.3e}, max {values.max():.3e}"
-            )
-    return 0
