@@ -376,6 +376,7 @@ def _waypoint_csv(path: Path | None, robot):
         yield lambda *row: None
         return
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         handle = open(path, "w", newline="")
     except OSError as err:
         raise TaskError(f"cannot write --output {path}: {err.strerror}") from None

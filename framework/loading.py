@@ -17,9 +17,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import LimitsError, RobotFileError, UnknownJointError, UnknownRobotError
+from .errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from .resources import data_dir
 from .robot import Robot, build_joints, default_bounds
+from .validate import names, table
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -127,7 +128,38 @@ def parse_urdf(text: str, what: str = "URDF") -> ET.Element:
         raise RobotFileError(f"{what} is not a URDF: root element is <{root.tag}>, expected <robot>")
     if root.find("link") is None:
         raise RobotFileError(f"{what} has no <link>")
+    _check_tree(root, what)
     return root
+
+
+def _check_tree(root: ET.Element, what: str) -> None:
+    """The links and joints form one tree (urdfdom only prints its reason to stderr): every joint names a parent
+    and a child that exist, no link has two parents, one root link."""
+    links = [link.get("name") for link in root.findall("link")]
+    seen: set[str] = set()
+    parent_of: dict[str, str] = {}
+    for link in links:
+        if not link:
+            raise RobotFileError(f"{what}: a <link> has no name")
+        if link in seen:
+            raise RobotFileError(f"{what}: link {link!r} is defined twice")
+        seen.add(link)
+    for joint in root.findall("joint"):
+        name = joint.get("name")
+        ends = {}
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            ends[end] = None if element is None else element.get("link")
+            if ends[end] not in seen:
+                raise RobotFileError(f"{what}: joint {name!r} has {end} link {ends[end]!r}, which is not a <link>")
+        child = ends["child"]
+        if child in parent_of:
+            raise RobotFileError(f"{what}: link {child!r} is the child of two joints ({parent_of[child]!r} and {name!r})")
+        parent_of[child] = name
+    roots = [link for link in links if link not in parent_of]
+    if len(roots) != 1:
+        raise RobotFileError(f"{what}: the links form {'no tree (a loop)' if not roots else 'several trees'}; "
+                             f"root links: {roots}")
 
 
 def robot_from_urdf(
@@ -146,6 +178,12 @@ def robot_from_urdf(
     """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot` (``strict_groups``: every member of
     ``groups`` must be a solved joint)."""
     what = source or "URDF text"
+    joints = None if joints is None else names(joints, "joints", UnknownJointError)
+    locked = None if locked is None else table(locked, "locked", LimitsError)
+    end_effectors = None if end_effectors is None else names(end_effectors, "end_effectors", UnknownFrameError)
+    if groups is not None:
+        groups = {g: names(m, f"group {g!r}", UnknownJointError) for g, m in table(groups, "groups").items()}
+    bounds = None if bounds is None else table(bounds, "bounds", LimitsError)
     root = parse_urdf(text, what)
     name = name or root.get("name") or "robot"
     try:
@@ -155,6 +193,8 @@ def robot_from_urdf(
 
     model, locked_values = _reduce(full, joints, locked or {})
     robot_joints = build_joints(model)
+    if not robot_joints:
+        raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve")
     lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
     if end_effectors is None:
         end_effectors = _leaf_frames(model)

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .costs import Objective, Program, Term
+from .costs import Objective, Program
 from .errors import TaskError
 from .robot import Robot
 
@@ -53,7 +53,7 @@ class Problem:
 
     Args:
         robot: the robot (its ``lower``/``upper`` are the search box).
-        objective: weighted terms (a single :class:`Term` is accepted).
+        objective: weighted terms: an :class:`Objective`, ``(weight, term)`` pairs or a single :class:`Term`.
         bounds: out-of-box candidates are ``"resample"``-d uniformly (paper 000 eq. 12), ``"clip"``-ped, or
             left to a ``"penalty"`` (a :class:`~framework.costs.JointLimitPenalty` is appended if the objective
             has none); the local engine always keeps its steps in the box.
@@ -71,10 +71,8 @@ class Problem:
     priorities: bool = True
 
     def __post_init__(self) -> None:
-        objective = self.objective
-        if isinstance(objective, Term):
-            objective = Objective(((1.0, objective),))
-        if not isinstance(objective, Objective) or len(objective) == 0:
+        objective = Objective.of(self.objective)
+        if len(objective) == 0:
             raise TaskError("a problem needs an objective of at least one cost term")
         if self.bounds not in BOUNDS:
             raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")

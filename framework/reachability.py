@@ -143,6 +143,8 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
     robot.frame_id(frame)
     if not (np.isfinite(voxel) and voxel > 0):
         raise TaskError(f"voxel must be a positive length [m]; got {voxel!r}")
+    if isinstance(orientations, bool) or not isinstance(orientations, (int, np.integer)) or orientations < 0:
+        raise TaskError(f"orientations must be an integer >= 0 (0: the position alone); got {orientations!r}")
     if box is None:
         X = robot.random_configurations(np.random.default_rng(seed), 2000)
         points = robot.frame_poses(X, frame).positions[:, 0]

@@ -21,6 +21,7 @@ from .errors import SolverError
 from .problem import Problem
 from .solvers import Request, ik_solver
 from .engine import task_errors
+from .solvers.base import MAX_POPULATION
 from .solvers.ik import positive_int
 
 #: The solver ``solve`` uses when none is named.
@@ -141,7 +142,7 @@ def make_request(
         raise SolverError(f"angle_tolerance must be a positive number [rad]; got {angle_tolerance!r}")
     if max_iterations is not None:
         max_iterations = positive_int(max_iterations, "max_iterations")
-    population = positive_int(population, "population")
+    population = positive_int(population, "population", maximum=MAX_POPULATION)
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
     return Request(

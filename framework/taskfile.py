@@ -77,7 +77,8 @@ from .loading import load_robot
 from .problem import Problem
 from .resources import data_dir
 from .robot import Robot
-from .trajectory import Trajectory, circle, lemniscate, line, paper000, rose, sinusoid
+from .trajectory import Trajectory, circle, lemniscate, line, paper000, point_count, rose, sinusoid
+from .validate import check_table
 
 if TYPE_CHECKING:  # pragma: no cover
     from .fabrik.taskfile import ReachTask
@@ -104,11 +105,15 @@ def _rotation(axis: int):
 
 _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
 #: Keys of ``[task]``, and the top-level tables of an IK / tracking task file.
-TASK_KEYS = {"name", "robot", "description", "priorities", "joints", "locked", "end_effectors", "groups", "xacro_args",
-             "bounds", "package_dirs"}
+#: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
+TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
+             "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
+             "bounds": "table", "package_dirs": "names"}
 TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench"}
-SOLVER_KEYS = {"name", "population", "max_iterations", "tolerance", "seed", "bounds", "options", "stop_at_tolerance",
-               "warm_start", "predict"}
+#: ``[solver]`` keys and the kind of their values.
+SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
+               "seed": "integer", "bounds": "text", "options": "table", "stop_at_tolerance": "bool",
+               "warm_start": "bool", "predict": "bool"}
 #: ``[trajectory]`` types -> (required keys, optional keys); every type also takes ``name`` and ``orientation``.
 TRAJECTORY_KEYS: dict[str, tuple[set[str], set[str]]] = {
     "circle": ({"centre", "radius"}, {"points", "plane", "start_angle", "turns"}),
@@ -166,7 +171,11 @@ def evaluate(expression: Any, variables: Mapping[str, Any], where: str) -> np.nd
             value = walk(node.operand)
             return -value if isinstance(node.op, ast.USub) else value
         if isinstance(node, ast.BinOp) and type(node.op) in _OPS:
-            return _OPS[type(node.op)](walk(node.left), walk(node.right))
+            with np.errstate(all="raise"):
+                try:
+                    return _OPS[type(node.op)](walk(node.left), walk(node.right))
+                except (ZeroDivisionError, FloatingPointError, ValueError) as err:
+                    raise TaskError(f"{where}: cannot evaluate {expression!r}: {err}") from None
         if isinstance(node, ast.List):
             return np.array([walk(e) for e in node.elts], dtype=float)
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _ROTATIONS:
@@ -271,22 +280,18 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
     if unknown_tables:
         raise TaskError(f"unknown tables {unknown_tables}; known: {sorted(TABLES)} (and [reach] or [placement] "
                         "for those task kinds)")
-    unknown = sorted(set(task) - TASK_KEYS)
-    if unknown:
-        raise TaskError(f"[task] has unknown keys {unknown}; known: {sorted(TASK_KEYS)}")
+    check_table(task, TASK_KEYS, "[task]")
     if "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")
     robot_source = task["robot"]
     local = path.parent / str(robot_source)
     robot = load_robot(local if local.is_file() else robot_source, **_robot_options(task, path))
-    solver = dict(raw.get("solver", {}))
-    unknown = set(solver) - SOLVER_KEYS
-    if unknown:
-        raise TaskError(f"[solver] has unknown keys {sorted(unknown)}; known: {sorted(SOLVER_KEYS)}")
-    terms = raw.get("terms")
+    solver = dict(_table(raw, "solver", path, required=False))
+    check_table(solver, SOLVER_KEYS, "[solver]")
+    terms = _tables(raw, "terms")
     if not terms:
         raise TaskError("a task needs at least one [[terms]] entry")
-    cases_raw = raw.get("cases") or [{"name": task.get("name", path.stem)}]
+    cases_raw = _tables(raw, "cases") or [{"name": task.get("name", path.stem)}]
     cases = []
     bounds = solver.get("bounds", "resample")
     priorities = task.get("priorities", True)
@@ -314,10 +319,22 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
                     priorities)
 
 
-def _table(raw: Mapping, key: str, path: Path) -> dict:
-    if key not in raw or not isinstance(raw[key], dict):
-        raise TaskError(f"missing [{key}] table")
+def _table(raw: Mapping, key: str, path: Path, *, required: bool = True) -> dict:
+    if key not in raw:
+        if required:
+            raise TaskError(f"missing [{key}] table")
+        return {}
+    if not isinstance(raw[key], dict):
+        raise TaskError(f"{key} must be a [{key}] table; got {raw[key]!r}")
     return raw[key]
+
+
+def _tables(raw: Mapping, key: str) -> list[dict]:
+    """The array of tables ``[[key]]`` (empty if absent)."""
+    value = raw.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise TaskError(f"{key} must be an array of tables ([[{key}]] entries); got {value!r}")
+    return value
 
 
 def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
@@ -445,7 +462,7 @@ def _trajectory(spec: Any, variables: Mapping, path: Path, points: int | None, w
 
     def integer(key: str, default: int) -> int:
         number = value(key) if key in spec else default
-        if float(number) != int(number):
+        if not np.isfinite(number) or float(number) != int(number):
             raise TaskError(f"{where} {key} must be an integer; got {number!r}")
         return int(number)
 
@@ -477,7 +494,8 @@ def _trajectory(spec: Any, variables: Mapping, path: Path, points: int | None, w
         else:
             trajectory = Trajectory.from_array(value("positions"), name)
         if points is not None:
-            trajectory = trajectory[np.unique(np.linspace(0, trajectory.K - 1, points).round().astype(int))]
+            keep = np.linspace(0, trajectory.K - 1, point_count(points)).round().astype(int)
+            trajectory = trajectory[np.unique(keep)]
     if "orientation" in spec:
         trajectory = trajectory.with_orientation(_rotation_value(value("orientation"), f"{where} orientation"))
     return trajectory

@@ -344,9 +344,14 @@ def _plane(plane: str | tuple[ArrayLike, ArrayLike]) -> tuple[np.ndarray, np.nda
     return u, v
 
 
-def _count(points: int) -> int:
-    if isinstance(points, bool) or int(points) != points or points < 2:
-        raise TaskError(f"a trajectory needs an integer number of points >= 2; got {points!r}")
+#: Most waypoints a parametric path is sampled at (each is one IK solve; beyond this is a typo, not a path).
+MAX_POINTS = 1_000_000
+
+
+def point_count(points: int) -> int:
+    if isinstance(points, bool) or not isinstance(points, (int, float, np.integer, np.floating)) \
+            or not np.isfinite(points) or int(points) != points or not 2 <= points <= MAX_POINTS:
+        raise TaskError(f"a trajectory needs an integer number of points in [2, {MAX_POINTS:,}]; got {points!r}")
     return int(points)
 
 
@@ -385,7 +390,7 @@ def circle(
     name: str = "circle",
 ) -> Trajectory:
     """Circle ``centre + r (cos θ e_u + sin θ e_v)``, ``θ = start_angle + linspace(0, 2π turns, points)``."""
-    theta = start_angle + np.linspace(0.0, 2 * np.pi * turns, _count(points))
+    theta = start_angle + np.linspace(0.0, 2 * np.pi * turns, point_count(points))
     r = _positive(radius, "circle radius")
     return plane_curve(
         centre, r * np.cos(theta), r * np.sin(theta), plane=plane, orientation=orientation, name=name
@@ -407,7 +412,7 @@ def lemniscate(
     ``v = a sin t cos t / (1 + sin² t)``; it starts at the tip of the ``+e_u`` lobe and crosses the centre
     twice. Paper 002 gives only "r = a cos(θ)" and the parameter ``a``; this is our reading of it.
     """
-    t = np.linspace(0.0, 2 * np.pi, _count(points))
+    t = np.linspace(0.0, 2 * np.pi, point_count(points))
     a = _positive(a, "lemniscate parameter a")
     d = 1.0 + np.sin(t) ** 2
     return plane_curve(
@@ -432,7 +437,7 @@ def rose(
     name: str = "rose",
 ) -> Trajectory:
     """Rose curve: ``r = radius + amplitude cos(petals θ)``, ``u = r cos θ``, ``v = r sin θ``, ``θ ∈ [0, 2π]``."""
-    theta = np.linspace(0.0, 2 * np.pi, _count(points))
+    theta = np.linspace(0.0, 2 * np.pi, point_count(points))
     r = _positive(radius, "rose radius") + float(amplitude) * np.cos(petals * theta)
     return plane_curve(
         centre, r * np.cos(theta), r * np.sin(theta), plane=plane, orientation=orientation, name=name
@@ -448,7 +453,7 @@ def line(
     name: str = "line",
 ) -> Trajectory:
     """Evenly spaced waypoints from ``start`` to ``stop`` (both included) [m]."""
-    s = np.linspace(0.0, 1.0, _count(points))[:, None]
+    s = np.linspace(0.0, 1.0, point_count(points))[:, None]
     a, b = _vector(start, "line start"), _vector(stop, "line stop")
     return Trajectory(a + s * (b - a), orientation, name)
 
@@ -475,7 +480,7 @@ def sinusoid(
     length = float(np.linalg.norm(b - a))
     if length == 0:
         raise TaskError("a sinusoid needs start != stop")
-    s = np.linspace(0.0, length, _count(points))
+    s = np.linspace(0.0, length, point_count(points))
     w = float(amplitude) * np.sin(float(wavenumber) * s + float(phase))
     if saturation is not None:
         w = np.clip(w, -_positive(saturation, "saturation"), saturation)

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -145,6 +145,26 @@ class Objective:
     """A weighted sum of terms: ``f(X) = Σ wᵢ termᵢ(X)``."""
 
     terms: tuple[tuple[float, Term], ...]
+
+    def __post_init__(self) -> None:
+        pairs = []
+        for pair in self.terms:
+            if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[1], Term)):
+                raise TaskError(f"an objective is (weight, term) pairs; got {pair!r}")
+            pairs.append((check_weight(pair[0]), pair[1]))
+        object.__setattr__(self, "terms", tuple(pairs))
+
+    @classmethod
+    def of(cls, objective: Term | Objective | Iterable[tuple[float, Term]]) -> Objective:
+        """``objective`` as an :class:`Objective`: a term (weight 1), an objective, or ``(weight, term)`` pairs."""
+        if isinstance(objective, Term):
+            return cls(((1.0, objective),))
+        if isinstance(objective, Objective):
+            return objective
+        try:
+            return cls(tuple(tuple(pair) if isinstance(pair, list) else pair for pair in objective))
+        except TypeError:
+            raise TaskError(f"an objective is a term or (weight, term) pairs; got {objective!r}") from None
 
     def __add__(self, other: Term | Objective) -> Objective:
         if isinstance(other, Term):

@@ -150,9 +150,11 @@ def parse_options(options_type: type, options: Mapping[str, Any] | None, solver:
     return options_type(**options)
 
 
-def positive_int(value: Any, what: str, *, minimum: int = 1) -> int:
-    """``value`` as an int ``>= minimum``; raises :class:`SolverError` naming ``what``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float)) or value != int(value) \
-            or not np.isfinite(value) or int(value) < minimum:
+def positive_int(value: Any, what: str, *, minimum: int = 1, maximum: int | None = None) -> int:
+    """``value`` as an int in ``[minimum, maximum]``; raises :class:`SolverError` naming ``what``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
+            or not np.isfinite(value) or value != int(value) or int(value) < minimum:
         raise SolverError(f"{what} must be an integer >= {minimum}; got {value!r}")
+    if maximum is not None and int(value) > maximum:
+        raise SolverError(f"{what} must be at most {maximum:,}; got {int(value):,}")
     return int(value)

@@ -1,0 +1,51 @@
+"""Shape checks of user input shared by the API and the task files: a list of names, a table, a table's keys
+and value types. Each raises our error naming the field (the caller adds the file and table)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from .errors import TaskError
+
+#: A task-file value kind -> (Python types, how the message says it). Booleans are not numbers here.
+KINDS: dict[str, tuple[tuple[type, ...], str]] = {
+    "text": ((str,), "a string"),
+    "integer": ((int,), "an integer"),
+    "number": ((int, float), "a number"),
+    "bool": ((bool,), "true or false"),
+    "list": ((list, tuple), "a list"),
+    "table": ((dict,), "a table"),
+    "names": ((list, tuple), "a list of names"),
+    "any": ((object,), "a value"),
+}
+
+
+def names(value: Any, what: str, error: type[Exception] = TaskError) -> tuple[str, ...]:
+    """``value`` as a tuple of names; a lone string or anything but a list of strings raises ``error``."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) \
+            or not all(isinstance(v, str) for v in value):
+        raise error(f"{what} must be a list of names; got {value!r}")
+    return tuple(value)
+
+
+def table(value: Any, what: str, error: type[Exception] = TaskError) -> Mapping:
+    """``value`` if it is a mapping (a TOML table / dict), else ``error`` naming ``what``."""
+    if not isinstance(value, Mapping):
+        raise error(f"{what} must be a table (name = value, ...); got {value!r}")
+    return value
+
+
+def check_table(values: Mapping[str, Any], schema: Mapping[str, str], where: str) -> None:
+    """Every key of ``values`` is in ``schema`` and its value of the schema's kind (see :data:`KINDS`);
+    raises :class:`TaskError` naming ``where`` and the key."""
+    unknown = sorted(set(values) - set(schema))
+    if unknown:
+        raise TaskError(f"{where} has unknown keys {unknown}; known: {sorted(schema)}")
+    for key, value in values.items():
+        types, said = KINDS[schema[key]]
+        ok = isinstance(value, types) and not (isinstance(value, bool) and schema[key] in ("integer", "number"))
+        if ok and schema[key] == "names":
+            ok = all(isinstance(v, str) for v in value)
+        if not ok:
+            raise TaskError(f"{where} {key} must be {said}; got {value!r}")
