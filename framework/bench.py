@@ -51,6 +51,7 @@ import numpy as np
 
 from .costs import Motion, Orientation, Position, RelativePosition
 from .errors import EXIT_INTERRUPTED, EXIT_OK, MetaikError, TaskError
+from .interrupts import graceful_interrupt
 from .loading import load_robot
 from .problem import Problem
 from .stats import (
@@ -64,20 +65,13 @@ from .stats import (
     terms_markdown,
 )
 from .taskfile import resolve_task
+from .validate import check_table
 
 HISTORY_POINTS = 200
-BENCH_KEYS = {
-    "solvers",
-    "runs",
-    "seed",
-    "reference",
-    "group_by",
-    "random_reachable",
-    "case_seed",
-    "history_points",
-    "options",
-    "systems",
-}
+#: ``[bench]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
+BENCH_KEYS = {"solvers": "names", "runs": "integer", "seed": "integer", "reference": "text", "group_by": "text",
+              "random_reachable": "integer", "case_seed": "integer", "history_points": "integer",
+              "options": "table", "systems": "list"}
 SYSTEM_KEYS = {"robot", "name", "cases"}
 GROUP_BY = ("case", "system")
 #: Robot options of [task] that belong to the task's own robot and are dropped for other systems.
@@ -143,7 +137,7 @@ class Grid:
     """Every run of a benchmark, in execution order (seed-major, so a partial grid covers every solver)."""
 
     tasks: tuple[BenchTask, ...]
-    specs: tuple[RunSpec, ...]
+    specs: Sequence[RunSpec]
     tolerance: float
     reference: str | None
     group_by: str
@@ -162,9 +156,7 @@ def bench_table(raw: Mapping[str, Any], path: Path) -> dict[str, Any]:
     bench = raw.get("bench", {})
     if not isinstance(bench, dict):
         raise TaskError(f"{path}: [bench] must be a table")
-    unknown = set(bench) - BENCH_KEYS
-    if unknown:
-        raise TaskError(f"{path}: [bench] has unknown keys {sorted(unknown)}; known: {sorted(BENCH_KEYS)}")
+    check_table(bench, BENCH_KEYS, f"{path}: [bench]")
     for i, system in enumerate(bench.get("systems", [])):
         if not isinstance(system, dict) or "robot" not in system:
             raise TaskError(f"{path}: [[bench.systems]] #{i + 1} needs a robot")
@@ -179,10 +171,13 @@ def bench_table(raw: Mapping[str, Any], path: Path) -> dict[str, Any]:
 
 def expand_task(path: str | Path) -> BenchTask:
     """Load a task file and expand its systems and generated cases into :class:`BenchCase` s (deterministic)."""
-    from .taskfile import load_task
+    from .taskfile import TaskFile, load_task
 
     path = Path(path).resolve()
     task = load_task(path)
+    if not isinstance(task, TaskFile) or task.is_tracking:
+        kind = "a tracking" if isinstance(task, TaskFile) else f"a {type(task).__name__}"
+        raise TaskError(f"{path}: metaik bench compares solvers on IK cases; this is {kind} task (metaik run it)")
     bench = bench_table(task.raw, path)
     systems = bench.get("systems") or [{"robot": None}]
     cases: list[BenchCase] = []
@@ -280,6 +275,58 @@ def random_reachable_cases(robot, count: int, rng: np.random.Generator) -> list[
     return cases
 
 
+#: Largest grid :func:`plan` builds unless told otherwise (``grid_limit=`` / ``metaik bench --grid-limit``).
+GRID_LIMIT = 100_000
+
+
+@dataclass(frozen=True)
+class _TaskRuns:
+    """One task's block of the grid: ``runs`` seeds x ``cases`` x ``solvers``, seed-major."""
+
+    task: BenchTask
+    solvers: tuple[str, ...]
+    cases: tuple[BenchCase, ...]
+    first_seed: int
+    runs: int
+    budgets: tuple[str, ...]  # per solver
+    history_points: int
+
+    def __len__(self) -> int:
+        return self.runs * len(self.cases) * len(self.solvers)
+
+    def spec(self, i: int) -> RunSpec:
+        r, rest = divmod(i, len(self.cases) * len(self.solvers))
+        c, s = divmod(rest, len(self.solvers))
+        case = self.cases[c]
+        return RunSpec(str(self.task.path), self.task.name, case.system, case.name, self.solvers[s],
+                       self.first_seed + r, self.budgets[s], case.fingerprint, self.history_points)
+
+
+class RunSpecs(Sequence):
+    """The runs of a grid, made when read (a grid is sized before any of its runs exists)."""
+
+    def __init__(self, blocks: Sequence[_TaskRuns]) -> None:
+        self._blocks = tuple(blocks)
+        self._ends = np.cumsum([len(b) for b in self._blocks]).tolist()
+
+    def __len__(self) -> int:
+        return self._ends[-1] if self._ends else 0
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        if not -len(self) <= i < len(self):
+            raise IndexError(i)
+        i %= len(self)
+        b = int(np.searchsorted(self._ends, i, side="right"))
+        return self._blocks[b].spec(i - (self._ends[b - 1] if b else 0))
+
+    def __iter__(self) -> Iterator[RunSpec]:
+        for block in self._blocks:
+            for i in range(len(block)):
+                yield block.spec(i)
+
+
 def plan(
     paths: Sequence[str | Path],
     *,
@@ -292,61 +339,73 @@ def plan(
     cases: Sequence[str] | None = None,
     reference: str | None = None,
     group_by: str | None = None,
+    grid_limit: int = GRID_LIMIT,
 ) -> Grid:
     """The grid of runs for task files; keyword arguments override the files' ``[bench]`` / ``[solver]`` values.
 
-    ``cases`` keeps only cases (or systems) with these names.
+    ``cases`` keeps only cases (or systems) with these names. The grid is sized first: more than ``grid_limit``
+    runs raise :class:`TaskError` (raise the limit to run it); its :class:`RunSpec` s are made as they are read.
     """
     from .solve import DEFAULT_SOLVER
     from .solvers import solver_names
+    from .solvers.base import MAX_POPULATION
+    from .solvers.ik import positive_int
+
+    def option(value, task_value, what: str, where: str, **limits) -> int:
+        try:
+            return positive_int(value if value is not None else task_value, what, **limits)
+        except MetaikError as err:
+            raise TaskError(f"{where}: {err}") from None
 
     tasks = tuple(expand_task(p) for p in paths)
     if not tasks:
         raise TaskError("a benchmark needs at least one task file")
+    if tolerance is not None and not (isinstance(tolerance, (int, float)) and math.isfinite(tolerance)
+                                      and tolerance > 0):
+        raise TaskError(f"tolerance must be a positive number; got {tolerance!r}")
     known = set(solver_names())
-    specs: list[RunSpec] = []
+    blocks: list[_TaskRuns] = []
     for task in tasks:
         b, s = task.bench, task.solver
-        names = list(solvers or b.get("solvers") or [s.get("name", DEFAULT_SOLVER)])
+        names = tuple(solvers or b.get("solvers") or [s.get("name", DEFAULT_SOLVER)])
         bad = [n for n in names if n not in known]
         if bad:
             raise TaskError(f"{task.path}: unknown solver(s) {bad}; available: {sorted(known)}")
-        n_runs = int(runs if runs is not None else b.get("runs", 1))
-        first = int(seed if seed is not None else b.get("seed", s.get("seed", 0)))
-        if n_runs < 1:
-            raise TaskError(f"{task.path}: runs must be >= 1; got {n_runs}")
-        selected = [c for c in task.cases if not cases or c.name in cases or c.system in cases]
+        where = f"{task.path}"
+        n_runs = option(runs, b.get("runs", 1), "runs", where)
+        first = option(seed, b.get("seed", s.get("seed", 0)), "seed", where, minimum=0)
+        selected = tuple(c for c in task.cases if not cases or c.name in cases or c.system in cases)
         if not selected:
             raise TaskError(f"{task.path}: no case named {list(cases or [])}")
         options = b.get("options", {})
-        for r in range(n_runs):
-            for c in selected:
-                for name in names:
-                    budget = {
-                        "population": int(population or s.get("population", 30)),
-                        "max_iterations": int(max_iterations or s.get("max_iterations", 1000)),
-                        "tolerance": float(tolerance or s.get("tolerance", 1e-4)),
-                        "stop_at_tolerance": bool(s.get("stop_at_tolerance", False)),
-                        "options": options.get(name, s.get("options") if name == s.get("name") else None),
-                    }
-                    specs.append(
-                        RunSpec(
-                            str(task.path),
-                            task.name,
-                            c.system,
-                            c.name,
-                            name,
-                            first + r,
-                            json.dumps(budget, sort_keys=True),
-                            c.fingerprint,
-                            int(b.get("history_points", HISTORY_POINTS)),
-                        )
-                    )
+        budgets = tuple(
+            json.dumps({
+                "population": option(population, s.get("population", 30), "population", where,
+                                     maximum=MAX_POPULATION),
+                "max_iterations": option(max_iterations, s.get("max_iterations", 1000), "max_iterations", where),
+                "tolerance": float(tolerance or s.get("tolerance", 1e-4)),
+                "stop_at_tolerance": bool(s.get("stop_at_tolerance", False)),
+                "options": options.get(name, s.get("options") if name == s.get("name") else None),
+            }, sort_keys=True)
+            for name in names
+        )
+        history = option(None, b.get("history_points", HISTORY_POINTS), "history_points", where)
+        blocks.append(_TaskRuns(task, names, selected, first, n_runs, budgets, history))
+    size = sum(len(block) for block in blocks)
+    if size > grid_limit:
+        raise TaskError(
+            f"the grid has {size:,} runs, more than the limit of {grid_limit:,}: lower runs / cases / solvers, "
+            f"or raise the limit (--grid-limit, plan(grid_limit=...)); --max-runs runs part of a grid"
+        )
     first_task = tasks[0]
+    every = {n for block in blocks for n in block.solvers}
+    if reference is not None and reference not in every:
+        raise TaskError(f"reference solver {reference!r} is not in the grid; its solvers: {sorted(every)}")
     ref = reference or first_task.bench.get("reference")
+    ref = ref if ref in every else None  # the file's reference, unless --solvers left it out
     return Grid(
         tasks,
-        tuple(specs),
+        RunSpecs(blocks),
         float(tolerance or first_task.solver.get("tolerance", 1e-4)),
         ref,
         group_by or first_task.bench.get("group_by", "case"),
@@ -575,32 +634,6 @@ class RunReport:
     results: Path
 
 
-class _Interrupt:
-    """SIGINT sets a flag (finish the runs in flight, then stop); a second SIGINT aborts at once."""
-
-    def __init__(self) -> None:
-        self.requested = False
-
-    def __call__(self, signum, frame) -> None:
-        if self.requested:
-            raise KeyboardInterrupt
-        self.requested = True
-
-
-@contextmanager
-def _graceful_interrupt() -> Iterator[_Interrupt]:
-    flag = _Interrupt()
-    try:
-        previous = signal.signal(signal.SIGINT, flag)
-    except ValueError:  # not the main thread: no signal handling
-        yield flag
-        return
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 def run_grid(
     grid: Grid | Sequence[RunSpec],
     results: str | Path,
@@ -666,7 +699,7 @@ def _run_locked(specs, results: Path, jobs, max_runs, chunk_size, progress, cons
     with (
         results.open("a") as out,
         _progress(progress, console, len(pending)) as advance,
-        _graceful_interrupt() as interrupt,
+        graceful_interrupt() as interrupt,
     ):
 
         def write(line: str) -> None:
@@ -1080,6 +1113,8 @@ def add_bench_command(subparsers) -> None:
                    help="run on a Dask cluster (an address, or 'local': a local cluster of --jobs processes)")
     p.add_argument("--out", help="output folder (default: results/bench/<task name>, git-ignored)")
     p.add_argument("--max-runs", type=int, help="stop after this many new runs (re-run to continue)")
+    p.add_argument("--grid-limit", type=int, default=GRID_LIMIT,
+                   help=f"refuse grids of more runs than this (default {GRID_LIMIT:,})")
     p.add_argument("--report-only", action="store_true", help="do not run; report the results file")
     p.add_argument(
         "--rerun", action="store_true", help="drop this grid's runs from the results file, run them again"
@@ -1108,7 +1143,11 @@ def bench_command(args, console) -> int:
         cases=args.case,
         reference=args.reference,
         group_by=args.group_by,
+        grid_limit=args.grid_limit,
     )
+    for flag, value in (("--jobs", args.jobs), ("--max-runs", args.max_runs)):
+        if value is not None and value < 1:
+            raise TaskError(f"{flag} must be an integer >= 1; got {value}")
     out = Path(args.out) if args.out else Path("results") / "bench" / grid.name
     results = out / "results.jsonl"
     console.print(f"[bold]{grid.name}[/]: {len(grid.specs)} runs → {results}")
