@@ -246,13 +246,14 @@ def random_robots(count: int) -> dict[str, object]:
         tree = random_tree(seed)
         robot = fw.robot_from_urdf(tree.urdf)
         kinds.update(j.kind.value for j in robot.joints)
+        kinds.update("mimic" for _ in robot.mimics)
         model = pin.buildModelFromXML(tree.urdf)
         data = model.createData()
         X = robot.random_configurations(np.random.default_rng(seed), 3)
         poses, J = robot.frame_jacobians(X, tree.leaves)
         h = 1e-6
         for b, x in enumerate(X):
-            pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, x))
+            pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, x, tree.mimic))
             for k, frame in enumerate(tree.leaves):
                 oMf = data.oMf[model.getFrameId(frame)]
                 fk_error = max(fk_error, np.abs(poses.positions[b, k] - oMf.translation).max(),

@@ -73,7 +73,8 @@ class PopulationKinematics:
 
     The model is flattened into two tables the kernel walks: per visited joint ``[parent slot, kind code,
     first coordinate, axis code, identity placement rotation]`` and ``[placement rotation (9, row-major),
-    placement translation (3), axis (3)]``; per frame its joint slot and ``[rotation (9), translation (3)]`` in
+    placement translation (3), axis (3), multiplier, offset]`` (the joint's value is ``multiplier · x + offset``:
+    1 and 0 but for mimic joints, which read their leader's coordinate); per frame its joint slot and ``[rotation (9), translation (3)]`` in
     that joint. Axis code 1-6 marks a revolute joint about ±x, ±y or ±z (most URDFs): its rotation is applied
     with 6 products instead of Rodrigues' 27.
     """
@@ -81,7 +82,7 @@ class PopulationKinematics:
     def __init__(self, robot: Robot, frames: tuple[str, ...]):
         model = robot.model
         frame_ids = [robot.frame_id(f) for f in frames]
-        by_pin_id = {j.pin_id: j for j in robot.joints}
+        by_pin_id = {j.pin_id: j for j in (*robot.joints, *robot.mimics)}
 
         # Joints on the root paths of the requested frames, in Pinocchio (topological) order.
         needed: set[int] = set()
@@ -94,14 +95,15 @@ class PopulationKinematics:
         slot = {jid: i for i, jid in enumerate(order)}
 
         self._joint_int = np.zeros((len(order), 5), dtype=np.int64)
-        self._joint_geo = np.zeros((len(order), 15))
+        self._joint_geo = np.zeros((len(order), 17))
         for i, jid in enumerate(order[1:], start=1):
             joint = by_pin_id[jid]
             placement = model.jointPlacements[jid]
             identity = int(np.array_equal(placement.rotation, np.eye(3)))
             self._joint_int[i] = (slot[model.parents[jid]], _KIND_CODE[joint.kind], joint.index,
                                   _axis_code(joint.axis), identity)
-            self._joint_geo[i] = np.concatenate([placement.rotation.ravel(), placement.translation, joint.axis])
+            self._joint_geo[i] = np.concatenate([placement.rotation.ravel(), placement.translation, joint.axis,
+                                                 [joint.multiplier, joint.offset]])
         self._frame_slot = np.array([slot[model.frames[f].parentJoint] for f in frame_ids], dtype=np.int64)
         self._frame_geo = np.array(
             [np.concatenate([model.frames[f].placement.rotation.ravel(), model.frames[f].placement.translation])
@@ -128,7 +130,7 @@ class PopulationKinematics:
                 kind, first = int(self._joint_int[j, 1]), int(self._joint_int[j, 2])
                 coordinates += range(first, first + (3 if kind == _PLANAR else 1))
                 j = int(self._joint_int[j, 0])
-            idx += sorted(coordinates)
+            idx += sorted(set(coordinates))  # a leader and its mimic joints share a coordinate
             ptr.append(len(idx))
         return np.array(ptr, dtype=np.int64), np.array(idx, dtype=np.int64)
 
@@ -189,8 +191,9 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
         py = w[3] * g[9] + w[4] * g[10] + w[5] * g[11] + w[10]
         pz = w[6] * g[9] + w[7] * g[10] + w[8] * g[11] + w[11]
         o = W[j]
+        q = g[15] * x[i] + g[16]  # the joint's value (a mimic joint's from its leader's coordinate)
         if kind == 0 and code > 0:  # revolute about a principal axis: rotate two columns of A
-            c, s = np.cos(x[i]), np.sin(x[i])
+            c, s = np.cos(q), np.sin(q)
             if code > 3:
                 s, code = -s, code - 3
             if code == 3:  # z: columns 0, 1
@@ -208,7 +211,6 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[9], o[10], o[11] = px, py, pz
             continue
         if kind == 1:  # prismatic: translate along the axis
-            q = x[i]
             ux, uy, uz = g[12] * q, g[13] * q, g[14] * q
             o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], o[8] = a00, a01, a02, a10, a11, a12, a20, a21, a22
             o[9] = px + a00 * ux + a01 * uy + a02 * uz
@@ -216,7 +218,7 @@ def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[11] = pz + a20 * ux + a21 * uy + a22 * uz
             continue
         if kind == 0:  # revolute: Rodrigues, M = c I + s [u]x + (1 - c) u uᵀ
-            c, s = np.cos(x[i]), np.sin(x[i])
+            c, s = np.cos(q), np.sin(q)
             ux, uy, uz = g[12], g[13], g[14]
             v = 1.0 - c
             m00, m01, m02 = c + v * ux * ux, v * ux * uy - s * uz, v * ux * uz + s * uy
@@ -303,7 +305,8 @@ def fk_jacobian_one(x, jint, jgeo, fslot, fgeo, out, W, J):
 
 @numba.njit(cache=True)
 def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
-    """Frame Jacobians ``J (k, 6, n)`` from the poses ``out`` and joint placements ``W`` of a FK at ``x``."""
+    """Frame Jacobians ``J (k, 6, n)`` from the poses ``out`` and joint placements ``W`` of a FK at ``x``
+    (columns add up: a mimic joint adds its multiplier times its own column to its leader's)."""
     J[:] = 0.0
     for f in range(fslot.shape[0]):
         px, py, pz = out[f, 9], out[f, 10], out[f, 11]
@@ -311,23 +314,27 @@ def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
         while j > 0:
             kind, i = jint[j, 1], jint[j, 2]
             w = W[j]
-            ux, uy, uz = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14]
+            ux, uy, uz, m = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14], jgeo[j, 15]
             if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
                 c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
                 for r in range(3):
                     J[f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
                     J[f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
                 ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
-            # world axis a = R_j u (the joint's own rotation leaves u fixed)
-            ax = w[0] * ux + w[1] * uy + w[2] * uz
-            ay = w[3] * ux + w[4] * uy + w[5] * uz
-            az = w[6] * ux + w[7] * uy + w[8] * uz
+            # world axis a = R_j u (the joint's own rotation leaves u fixed), times the joint's multiplier
+            ax = m * (w[0] * ux + w[1] * uy + w[2] * uz)
+            ay = m * (w[3] * ux + w[4] * uy + w[5] * uz)
+            az = m * (w[6] * ux + w[7] * uy + w[8] * uz)
             if kind == 1:  # prismatic: translation along a
-                J[f, 0, i], J[f, 1, i], J[f, 2, i] = ax, ay, az
+                J[f, 0, i] += ax
+                J[f, 1, i] += ay
+                J[f, 2, i] += az
             else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
                 dx, dy, dz = px - w[9], py - w[10], pz - w[11]
-                J[f, 0, i] = ay * dz - az * dy
-                J[f, 1, i] = az * dx - ax * dz
-                J[f, 2, i] = ax * dy - ay * dx
-                J[f, 3, i], J[f, 4, i], J[f, 5, i] = ax, ay, az
+                J[f, 0, i] += ay * dz - az * dy
+                J[f, 1, i] += az * dx - ax * dz
+                J[f, 2, i] += ax * dy - ay * dx
+                J[f, 3, i] += ax
+                J[f, 4, i] += ay
+                J[f, 5, i] += az
             j = jint[j, 0]

@@ -191,8 +191,9 @@ def robot_from_urdf(
     except Exception as err:  # Pinocchio raises ValueError / RuntimeError on inconsistent trees
         raise RobotFileError(f"Pinocchio cannot build a model from {what}: {err}") from err
 
-    model, locked_values = _reduce(full, joints, locked or {})
-    robot_joints = build_joints(model)
+    mimic = mimic_joints(root, what)
+    model, locked_values = _reduce(full, joints, locked or {}, mimic)
+    robot_joints, mimics = build_joints(model, mimic)
     if not robot_joints:
         raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve")
     lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
@@ -209,15 +210,48 @@ def robot_from_urdf(
         urdf=text,
         locked=locked_values,
         source=source,
+        mimics=mimics,
     )
     robot = _with_groups(robot, groups, strict=strict_groups)
     return robot.with_bounds(bounds) if bounds else robot
 
 
+def mimic_joints(root: ET.Element, what: str = "URDF") -> dict[str, tuple[str, float, float]]:
+    """The URDF's ``<mimic>`` couplings: joint name -> (leader, multiplier, offset); chains of mimics resolve
+    to the first leader."""
+    mimic: dict[str, tuple[str, float, float]] = {}
+    for joint in root.findall("joint"):
+        element = joint.find("mimic")
+        if element is None or joint.get("type") in ("fixed", None):
+            continue
+        try:
+            multiplier = float(element.get("multiplier", 1.0))
+            offset = float(element.get("offset", 0.0))
+        except ValueError:
+            raise RobotFileError(f"{what}: joint {joint.get('name')!r} has a <mimic> with a non-numeric value") from None
+        if not (np.isfinite(multiplier) and np.isfinite(offset)) or not element.get("joint"):
+            raise RobotFileError(f"{what}: joint {joint.get('name')!r} has an invalid <mimic>")
+        mimic[joint.get("name")] = (element.get("joint"), multiplier, offset)
+    for name in list(mimic):
+        leader, multiplier, offset = mimic[name]
+        seen = {name}
+        while leader in mimic:
+            if leader in seen:
+                raise RobotFileError(f"{what}: mimic joints {sorted(seen)} mimic each other in a loop")
+            seen.add(leader)
+            leader, m, o = mimic[leader][0], multiplier * mimic[leader][1], multiplier * mimic[leader][2] + offset
+            multiplier, offset = m, o
+        mimic[name] = (leader, multiplier, offset)
+    return mimic
+
+
 def _reduce(
-    full: pin.Model, joints: Sequence[str] | None, locked: Mapping[str, float]
+    full: pin.Model, joints: Sequence[str] | None, locked: Mapping[str, float],
+    mimic: Mapping[str, tuple[str, float, float]] | None = None,
 ) -> tuple[pin.Model, dict[str, float]]:
-    """Lock every joint not in ``joints`` (and every joint in ``locked``) with Pinocchio's reduced model."""
+    """Lock every joint not in ``joints`` (and every joint in ``locked``) with Pinocchio's reduced model; a mimic
+    joint is kept when its leader is solved and locked with it otherwise."""
+    mimic = dict(mimic or {})
     names = list(full.names)[1:]
     fixed = {f.name for f in full.frames if f.type == pin.FrameType.FIXED_JOINT}
     for joint in [*(joints or []), *locked]:
@@ -225,6 +259,11 @@ def _reduce(
             raise UnknownJointError(f"joint {joint!r} is a fixed joint: there is nothing to solve or lock")
         if joint not in names:
             raise UnknownJointError(f"the model has no joint {joint!r}; joints: {', '.join(names)}")
+        if joint in mimic:
+            raise UnknownJointError(f"joint {joint!r} mimics {mimic[joint][0]!r}: solve or lock {mimic[joint][0]!r}")
+    for name, (leader, _, _) in mimic.items():
+        if leader not in names:
+            raise RobotFileError(f"joint {name!r} mimics {leader!r}, which is not a movable joint of the model")
     if joints is not None:
         if not list(joints):
             raise UnknownJointError(f"joints=[] leaves nothing to solve; joints: {', '.join(names)}")
@@ -232,7 +271,9 @@ def _reduce(
         if both:
             raise UnknownJointError(f"joints {both} are both solved (joints=) and locked (locked=); choose one")
     keep = set(names if joints is None else joints) - set(locked)
-    to_lock = [n for n in names if n not in keep]
+    keep = {n for n in keep if n not in mimic} | {n for n, (leader, _, _) in mimic.items() if leader in keep}
+    to_lock = [n for n in names if n not in keep and n not in mimic]
+    to_lock += [n for n in names if n in mimic and n not in keep]  # after their leaders: they take their values
     if not to_lock:
         return full, {}
     q_ref = pin.neutral(full)
@@ -243,6 +284,9 @@ def _reduce(
         k, lo, hi = jm.idx_q, full.lowerPositionLimit[jm.idx_q], full.upperPositionLimit[jm.idx_q]
         if joint_name in locked:
             value = _locked_value(locked[joint_name], joint_name, lo, hi, bounded=jm.nq == 1)
+        elif joint_name in mimic:  # follows its locked leader
+            leader, multiplier, offset = mimic[joint_name]
+            value = multiplier * values[leader] + offset
         else:
             value = 0.0 if (jm.nq != 1 or lo <= 0.0 <= hi) else 0.5 * (lo + hi)
         if jm.nq == 1:
@@ -309,7 +353,8 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
         for frame in robot.end_effectors:
             jid, chain = model.frames[robot.frame_id(frame)].parentJoint, []
             while jid > 0:
-                chain.append(model.names[jid])
+                if model.names[jid] in solved:  # not the mimic joints (they follow a solved one)
+                    chain.append(model.names[jid])
                 jid = model.parents[jid]
             chains.append(chain[::-1])
         shared = set.intersection(*map(set, chains)) if len(chains) > 1 else set()

@@ -92,6 +92,11 @@ class Joint:
     idx_q: int  # first entry in Pinocchio's q
     idx_v: int  # first entry in Pinocchio's v
     axis: np.ndarray = field(repr=False)  # (3,) unit axis in the joint frame
+    #: a mimic joint follows ``leader``: its value is ``multiplier * x[index] + offset`` (``index``: the leader's
+    #: coordinate); it is never a search coordinate of its own
+    leader: str | None = None
+    multiplier: float = 1.0
+    offset: float = 0.0
 
     @property
     def width(self) -> int:
@@ -122,6 +127,7 @@ class Robot:
         groups: joint-group name -> indices into the search vector (e.g. ``"base"``, ``"arm1"``).
         urdf: the URDF text the model was built from (for viewers and recordings), with locked joints kept.
         locked: locked joint name -> value in joint coordinates.
+        mimics: joints of the model that follow a solved joint (URDF ``<mimic>``), in Pinocchio order.
     """
 
     name: str
@@ -134,6 +140,7 @@ class Robot:
     urdf: str | None = field(default=None, repr=False)
     locked: Mapping[str, float] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, repr=False)
+    mimics: tuple[Joint, ...] = field(default=(), repr=False)
     #: compiled-kinematics programs and packed layouts, built on first use (not part of the robot's value)
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -267,12 +274,18 @@ class Robot:
                 Q[:, k + 2], Q[:, k + 3] = np.cos(X[:, i + 2]), np.sin(X[:, i + 2])
             else:
                 Q[:, k] = X[:, i]
+        for m in self.mimics:
+            value = m.multiplier * X[:, m.index] + m.offset
+            if m.kind is JointKind.CONTINUOUS:
+                Q[:, m.idx_q], Q[:, m.idx_q + 1] = np.cos(value), np.sin(value)
+            else:
+                Q[:, m.idx_q] = value
         return Q[0] if single else Q
 
     @cached_property
     def _q_is_x(self) -> bool:
-        """True when Pinocchio's q is the joint-coordinate vector itself (no continuous or planar joint)."""
-        return all(j.kind in (JointKind.REVOLUTE, JointKind.PRISMATIC) for j in self.joints)
+        """True when Pinocchio's q is the joint-coordinate vector itself (no continuous, planar or mimic joint)."""
+        return not self.mimics and all(j.kind in (JointKind.REVOLUTE, JointKind.PRISMATIC) for j in self.joints)
 
     def from_pinocchio(self, Q: np.ndarray) -> np.ndarray:
         """Joint coordinates for Pinocchio configurations; ``(nq,) -> (n,)``, ``(pop, nq) -> (pop, n)``."""
@@ -299,15 +312,17 @@ class Robot:
         Identity except for planar joints, whose Pinocchio velocity is expressed in the moving joint frame:
         ``(v_x, v_y) = R(θ)ᵀ (ẋ, ẏ)``, ``ω = θ̇``. A Pinocchio Jacobian ``J`` (``6 × nv``) becomes ``J @ dv/dx``.
         """
-        T = np.eye(self.n)  # nv == n: one velocity per coordinate, in the same order
-        planar = [j for j in self.joints if j.kind is JointKind.PLANAR]
-        if not planar:
-            return T
         x = self.check_population(x)[0]
-        for j in planar:
-            i = j.index
-            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
-            T[i : i + 2, i : i + 2] = [[c, s], [-s, c]]
+        T = np.zeros((self.model.nv, self.n))
+        for j in self.joints:
+            for c in range(j.width):
+                T[j.idx_v + c, j.index + c] = 1.0
+            if j.kind is JointKind.PLANAR:
+                i, v = j.index, j.idx_v
+                c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+                T[v : v + 2, i : i + 2] = [[c, s], [-s, c]]
+        for m in self.mimics:  # a mimic joint moves at multiplier times its leader's rate
+            T[m.idx_v, m.index] = m.multiplier
         return T
 
     # ------------------------------------------------------------------ kinematics
@@ -370,20 +385,35 @@ def check_bounds(lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> 
             )
 
 
-def build_joints(model: pin.Model) -> tuple[Joint, ...]:
-    """The movable joints of a Pinocchio model in model order, with their search-vector offsets."""
-    joints, index = [], 0
+def build_joints(
+    model: pin.Model, mimic: Mapping[str, tuple[str, float, float]] | None = None
+) -> tuple[tuple[Joint, ...], tuple[Joint, ...]]:
+    """The solved joints of a Pinocchio model in model order with their search-vector offsets, and the mimic
+    joints (``mimic``: name -> (leader, multiplier, offset)), which take their leader's coordinate."""
+    mimic = mimic or {}
+    joints, followers, index = [], [], 0
     for jid in range(1, model.njoints):
-        jm = model.joints[jid]
+        jm, name = model.joints[jid], model.names[jid]
         try:
             kind, axis = joint_kind_and_axis(jm)
         except UnsupportedJointError as err:
-            raise UnsupportedJointError(f"joint {model.names[jid]!r}: {err}") from None
-        if jm.idx_v != index:  # e.g. mimic joints, which have no velocity of their own
-            raise UnsupportedJointError(f"joint {model.names[jid]!r} breaks the one-velocity-per-coordinate layout")
-        joints.append(Joint(model.names[jid], kind, index, jid, jm.idx_q, jm.idx_v, axis))
+            raise UnsupportedJointError(f"joint {name!r}: {err}") from None
+        if name in mimic:
+            if kind is JointKind.PLANAR:
+                raise UnsupportedJointError(f"joint {name!r}: a planar joint cannot mimic another")
+            followers.append((name, kind, jid, jm, axis))
+            continue
+        joints.append(Joint(name, kind, index, jid, jm.idx_q, jm.idx_v, axis))
         index += kind.width
-    return tuple(joints)
+    by_name = {j.name: j for j in joints}
+    mimics = []
+    for name, kind, jid, jm, axis in followers:
+        leader, multiplier, offset = mimic[name]
+        if leader not in by_name or by_name[leader].width != 1:
+            raise UnsupportedJointError(f"joint {name!r} mimics {leader!r}, which is not a solved one-coordinate joint")
+        mimics.append(Joint(name, kind, by_name[leader].index, jid, jm.idx_q, jm.idx_v, axis, leader,
+                            float(multiplier), float(offset)))
+    return tuple(joints), tuple(mimics)
 
 
 def default_bounds(

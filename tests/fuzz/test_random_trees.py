@@ -15,16 +15,18 @@ from tests.fuzz.trees import random_tree, trees
 FUZZ = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
 
 
-def _pinocchio_q(model: pin.Model, robot: fw.Robot, x: np.ndarray) -> np.ndarray:
+def _pinocchio_q(model: pin.Model, robot: fw.Robot, x: np.ndarray, mimic: dict | None = None) -> np.ndarray:
     """The Pinocchio configuration of search vector ``x``, built here from the joint types (cos/sin for
-    continuous joints), not with the framework's own conversion."""
+    continuous joints) and the tree's own mimic table, not with the framework's own conversion."""
     q = pin.neutral(model)
-    for joint in robot.joints:
-        jm = model.joints[model.getJointId(joint.name)]
+    values = {joint.name: x[joint.index] for joint in robot.joints}
+    values.update({name: m * values[leader] + o for name, (leader, m, o) in (mimic or {}).items()})
+    for name, value in values.items():
+        jm = model.joints[model.getJointId(name)]
         if jm.nq == 2:
-            q[jm.idx_q:jm.idx_q + 2] = np.cos(x[joint.index]), np.sin(x[joint.index])
+            q[jm.idx_q:jm.idx_q + 2] = np.cos(value), np.sin(value)
         else:
-            q[jm.idx_q] = x[joint.index]
+            q[jm.idx_q] = value
     return q
 
 
@@ -33,13 +35,14 @@ def _pinocchio_q(model: pin.Model, robot: fw.Robot, x: np.ndarray) -> np.ndarray
 def test_population_fk_equals_pinocchio(tree):
     robot = fw.robot_from_urdf(tree.urdf)
     assert robot.n == len(tree.movable) and sorted(robot.joint_names) == sorted(tree.movable)
+    assert {m.name: (m.leader, m.multiplier, m.offset) for m in robot.mimics} == tree.mimic
     model = pin.buildModelFromXML(tree.urdf)
     data = model.createData()
     X = robot.random_configurations(np.random.default_rng(tree.seed), 5)
     frames = tuple(f"l{i}" for i in range(len(model.frames)) if model.existFrame(f"l{i}"))
     poses = robot.frame_poses(X, frames)
     for b, x in enumerate(X):
-        pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, x))
+        pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, x, tree.mimic))
         for k, frame in enumerate(frames):
             oMf = data.oMf[model.getFrameId(frame)]
             np.testing.assert_allclose(poses.positions[b, k], oMf.translation, atol=1e-12)
@@ -87,7 +90,7 @@ def reach_reachable_pose(seed: int) -> tuple[bool, float, float]:
     x_true = robot.random_configurations(rng, 1)[0]
     target = robot.frame_placement(x_true, frame)
     result = fw.solve(fw.Problem(robot, fw.Pose(frame, target)), "hybrid", seed=seed, tolerance=1e-9)
-    pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, result.configuration))
+    pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, result.configuration, tree.mimic))
     oMf = data.oMf[model.getFrameId(frame)]
     position = float(np.linalg.norm(oMf.translation - target.translation))
     angle = float(np.linalg.norm(pin.log3(target.rotation.T @ oMf.rotation)))
