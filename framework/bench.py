@@ -75,7 +75,7 @@ BENCH_KEYS = {"solvers": "names", "runs": "integer", "seed": "integer", "referen
 SYSTEM_KEYS = {"robot", "name", "cases"}
 GROUP_BY = ("case", "system")
 #: Robot options of [task] that belong to the task's own robot and are dropped for other systems.
-ROBOT_OPTIONS = ("joints", "locked", "end_effectors", "xacro_args", "bounds")
+ROBOT_OPTIONS = ("joints", "locked", "end_effectors", "xacro_args", "bounds", "floating_base")
 
 
 # ---------------------------------------------------------------------------------------------- the grid

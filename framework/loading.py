@@ -20,6 +20,7 @@ import pinocchio as pin
 from .errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from .resources import data_dir
 from .robot import Robot, build_joints, default_bounds
+from .floating import expand as expand_floating, with_floating_joints
 from .validate import names, table
 
 if sys.version_info >= (3, 11):
@@ -50,6 +51,7 @@ def load_robot(
     unbounded_translation: float = 2.0,
     package_dirs: Sequence[str | Path] = (),
     trusted: bool = False,
+    floating_base: bool = False,
 ) -> Robot:
     """Load a robot by index name or from a ``.urdf`` / ``.xacro`` file.
 
@@ -66,6 +68,9 @@ def load_robot(
             ``AMENT_PREFIX_PATH`` are searched after them).
         trusted: let xacro read environment variables and YAML files and evaluate ``$(eval)`` (robot files are
             data by default: see :mod:`framework.xacro_files`).
+        floating_base: add a free-flyer above the root link, solved as six coordinates (``root_joint_x`` ...
+            ``root_joint_roll``; see :mod:`framework.floating`); a URDF ``floating`` joint always is. Lock one at a
+            pose with ``locked={"root_joint": (x, y, z, qx, qy, qz, qw)}`` (or a ``pinocchio.SE3`` / 4x4 matrix).
     """
     path, entry = resolve_robot(source)
     name = str(source) if entry else path.name.split(".")[0]
@@ -81,6 +86,7 @@ def load_robot(
         unbounded_translation=unbounded_translation,
         source=str(path),
         strict_groups=groups is not None,  # the index's groups shrink to the joints a user chose to solve
+        floating_base=floating_base,
     )
 
 
@@ -174,6 +180,7 @@ def robot_from_urdf(
     unbounded_translation: float = 2.0,
     source: str | None = None,
     strict_groups: bool = True,
+    floating_base: bool = False,
 ) -> Robot:
     """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot` (``strict_groups``: every member of
     ``groups`` must be a solved joint)."""
@@ -186,6 +193,12 @@ def robot_from_urdf(
     bounds = None if bounds is None else table(bounds, "bounds", LimitsError)
     root = parse_urdf(text, what)
     name = name or root.get("name") or "robot"
+    if not isinstance(floating_base, bool):
+        raise RobotFileError(f"floating_base must be true or false; got {floating_base!r}")
+    if floating_base or any(j.get("type") == "floating" for j in root.findall("joint")):
+        root, floating = with_floating_joints(root, add_root=floating_base, translation=unbounded_translation)
+        text = ET.tostring(root, encoding="unicode")
+        joints, locked = expand_floating(floating, joints, locked or {})
     try:
         full = pin.buildModelFromXML(text)
     except Exception as err:  # Pinocchio raises ValueError / RuntimeError on inconsistent trees

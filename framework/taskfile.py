@@ -108,7 +108,7 @@ _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
 #: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
 TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
              "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
-             "bounds": "table", "package_dirs": "names"}
+             "bounds": "table", "package_dirs": "names", "floating_base": "bool"}
 TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench"}
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
@@ -339,7 +339,7 @@ def _tables(raw: Mapping, key: str) -> list[dict]:
 
 def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
     options = {}
-    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args"):
+    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args", "floating_base"):
         if key in task:
             options[key] = task[key]
     if "package_dirs" in task:  # relative to the task file

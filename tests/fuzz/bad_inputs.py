@@ -138,6 +138,7 @@ CLI_CASES: list[CliCase] = [
     _cli("task file", "tolerance = -1", "run {file}", ["tolerance"], ik_file(solver="tolerance = -1")),
     _cli("task file", 'locked = ["joint1"]', "run {file}", ["locked"], ik_file(task='locked = ["joint1"]')),
     _cli("task file", "joints = 5", "run {file}", ["joints"], ik_file(task="joints = 5")),
+    _cli("task file", 'floating_base = "yes"', "run {file}", ["floating_base"], ik_file(task='floating_base = "yes"')),
     _cli("task file", "bounds = 5", "run {file}", ["bounds"], ik_file(solver="bounds = 5")),
     _cli("task file", "target 1/0", "run {file}", ["target", "1/0"], ik_file(target='"[1/0, 0, 0]"')),
     _cli("task file", "target nan", "run {file}", ["target"], ik_file(target="[nan, 0, 0.3]")),
