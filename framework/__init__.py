@@ -6,7 +6,7 @@ tracking → results and recordings.
 """
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Pose, Position,
+from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -36,6 +36,7 @@ __all__ = [
     "Evaluation",
     "IKResult",
     "Cone",
+    "LookAt",
     "Direction",
     "Distance",
     "JointLimitPenalty",

@@ -16,7 +16,7 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | direction | cone | joint_target |
+    type = "position"                     # position | orientation | direction | cone | look_at | joint_target |
                                           # distance | motion | relative_position | relative_pose |
                                           # joint_limits
     frame = "arm1_ee"
@@ -70,7 +70,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, Motion, Objective, Orientation, Position,
+from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Position,
                     RelativePose, RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
@@ -135,6 +135,7 @@ TERM_KEYS = {
     "relative_pose": {"frame_a", "frame_b", "offset", "offset_rotation"},
     "direction": {"frame", "direction", "axis"},
     "cone": {"frame", "direction", "axis", "max_angle"},
+    "look_at": {"frame", "point", "axis"},
     "joint_target": {"group", "target"},
     "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
     "joint_limits": set(),
@@ -390,6 +391,9 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
             elif kind == "cone":
                 term = Cone(spec["frame"], value("direction"), float(value("max_angle")),
                             axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0), name=name)
+            elif kind == "look_at":
+                term = LookAt(spec["frame"], value("point"), axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0),
+                              name=name)
             elif kind == "joint_target":
                 term = JointTarget(spec["group"], value("target"), name=name)
             elif kind == "distance":

@@ -1,7 +1,7 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
-from .direction import Cone, Direction
+from .direction import Cone, Direction, LookAt
 from .distance import Distance
 from .limits import JointLimitPenalty
 from .motion import JointTarget, Motion
@@ -15,6 +15,7 @@ __all__ = [
     "LEVELS",
     "Block",
     "Cone",
+    "LookAt",
     "Direction",
     "Distance",
     "JointLimitPenalty",

@@ -18,6 +18,7 @@ kind            residual                                      Jacobian          
 ``CONE``        ``θ − α`` when the axis is outside, else 0     ``∂θ`` outside the cone      ``e, d, α`` (7)
 ``RELATIVE_LOCAL``  ``R_aᵀ(p_b − p_a) − o`` (3) [m]            ``R_aᵀ(∂v + v × ω_a)``      ``o`` (3)
 ``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
+``LOOK_AT``     ``R_a e − u``, ``u = (t − p_a)/‖t − p_a‖`` (3)  ``ω × R_a e + (I − uuᵀ)J_p,a/‖t − p_a‖``  ``e, t`` (6)
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -27,7 +28,9 @@ of the plane perpendicular to ``d`` (two rows: the rotation about ``d`` is free)
 ``CONE``: the angle ``θ`` between ``R_a e`` and ``d`` held below ``α`` (one row, a hinge; its second order is
 left out: Gauss-Newton curvature in the Newton phase). ``RELATIVE_LOCAL`` / ``RELATIVE_ROTATION``: the pose of
 frame ``b`` in frame ``a`` against an offset ``(o, R_o)`` (two hands holding one object); their second order is
-left out too.
+left out too. ``LOOK_AT``: the frame axis ``e`` pointing at the world point ``t`` (a camera on a target); the
+residual's norm is ``2 sin(θ/2)`` of the angle θ between the axis and the line of sight (θ for small angles, no
+false minimum at θ = π); zero when the frame origin is at ``t``; its second order is left out.
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -39,7 +42,8 @@ import numba
 import numpy as np
 
 # Block kinds
-POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION = range(10)
+(POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
+ LOOK_AT) = range(11)
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -165,6 +169,8 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
         axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == CONE:
         cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == LOOK_AT:
+        look_at_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == RELATIVE_LOCAL:
         v0, v1, v2 = out[fb, 9] - out[fa, 9], out[fb, 10] - out[fa, 10], out[fb, 11] - out[fa, 11]
         for c in range(3):  # R_aᵀ v: column c of R_a (row-major) dotted with v
@@ -325,6 +331,36 @@ def cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
 
 
 @numba.njit(cache=True)
+def look_at_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> None:
+    """The ``LOOK_AT`` residual ``w − u`` (``w = R_a e``, ``u`` the unit line of sight to ``t``) and its Jacobian
+    ``ω_i × w + (I − uuᵀ) J_p,i / ‖t − p_a‖``; zero at ``p_a = t``."""
+    e0, e1, e2 = params[p], params[p + 1], params[p + 2]
+    w0 = out[fa, 0] * e0 + out[fa, 1] * e1 + out[fa, 2] * e2
+    w1 = out[fa, 3] * e0 + out[fa, 4] * e1 + out[fa, 5] * e2
+    w2 = out[fa, 6] * e0 + out[fa, 7] * e1 + out[fa, 8] * e2
+    v0, v1, v2 = params[p + 3] - out[fa, 9], params[p + 4] - out[fa, 10], params[p + 5] - out[fa, 11]
+    dist = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if dist == 0.0:
+        r[row], r[row + 1], r[row + 2] = 0.0, 0.0, 0.0
+        if want_jacobian:
+            for c in range(3):
+                for i in range(n):
+                    Jr[row + c, i] = 0.0
+        return
+    u0, u1, u2 = v0 / dist, v1 / dist, v2 / dist
+    r[row], r[row + 1], r[row + 2] = w0 - u0, w1 - u1, w2 - u2
+    if not want_jacobian:
+        return
+    for i in range(n):
+        o0, o1, o2 = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
+        j0, j1, j2 = Jf[fa, 0, i], Jf[fa, 1, i], Jf[fa, 2, i]
+        uj = u0 * j0 + u1 * j1 + u2 * j2
+        Jr[row, i] = o1 * w2 - o2 * w1 + (j0 - u0 * uj) / dist
+        Jr[row + 1, i] = o2 * w0 - o0 * w2 + (j1 - u1 * uj) / dist
+        Jr[row + 2, i] = o0 * w1 - o1 * w0 + (j2 - u2 * uj) / dist
+
+
+@numba.njit(cache=True)
 def rho_value(rho, scale, r, row, rows) -> float:
     """The value of a block from its residual ``r[row:row + rows]``."""
     if rho == L1:
@@ -404,7 +440,8 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
     ``½ ω_i × ω_j`` (zero on the diagonal) — exact for positions, exact for orientations on the target (``r = 0``).
     """
     kind = bint[b, KIND]
-    if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION:
+    if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION \
+            or kind == LOOK_AT:
         return
     if kind == ORIENTATION:
         p, fa = bint[b, PPTR], bint[b, FA]

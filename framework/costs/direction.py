@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import TaskError
 from ..robot import Robot
 from . import blocks as B
-from .base import Term
+from .base import Term, as_vector
 from .program import Block
 
 
@@ -90,3 +90,36 @@ class Cone(Direction):
     def __repr__(self) -> str:
         return (f"Cone({self.frame!r}, {np.round(self.direction, 6).tolist()}, max_angle={self.max_angle:g}, "
                 f"axis={self.axis.tolist()})")
+
+
+class LookAt(Term):
+    """The frame's ``axis`` (frame coordinates, default its z axis) pointing at the world ``point`` [m]: a camera
+    or a sensor aimed at a target, free to turn about its line of sight (BioIK's look-at goal).
+
+    Residual (3,): ``R e − u`` with ``u`` the unit vector from the frame origin to the point; its norm is
+    ``2 sin(θ/2)`` of the angle θ between the axis and the line of sight (the value; ≈ θ for small angles); a
+    task term held to the angular tolerance.
+    """
+
+    level = "task"
+    has_target = True
+
+    def __init__(self, frame: str, point: Sequence[float], *, axis: Sequence[float] = (0.0, 0.0, 1.0),
+                 name: str | None = None):
+        self.frame = frame
+        self.frames = (frame,)
+        self.axis = unit_vector(axis, f"axis of look-at term on {frame!r}")
+        self.name = name or f"look_at[{frame}]"
+        self.set_target(point)
+
+    def set_target(self, point: Sequence[float]) -> None:
+        """Move the point looked at (3,) [m, world]."""
+        self.point = as_vector(point, 3, f"look-at point of {self.frame!r}")
+        self._touch()
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        return (Block(B.LOOK_AT, B.NORM, 3, self.frames, np.concatenate([self.axis, self.point]),
+                      tolerance=B.TOL_ANGULAR),)
+
+    def __repr__(self) -> str:
+        return f"LookAt({self.frame!r}, {np.round(self.point, 6).tolist()}, axis={self.axis.tolist()})"
