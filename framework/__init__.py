@@ -5,8 +5,12 @@ The data flow follows the package layout: robot model (:mod:`~framework.robot`, 
 tracking → results and recordings.
 """
 
+from .numba_cache import drop_stale_entries
+
+drop_stale_entries()  # before any compiled function loads: cached code of edited sources is dropped
+
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
+from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -35,6 +39,7 @@ __all__ = [
     "ConfigurationError",
     "Evaluation",
     "IKResult",
+    "CenterOfMass",
     "Cone",
     "LookAt",
     "Direction",

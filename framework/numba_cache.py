@@ -1,0 +1,50 @@
+"""Numba's on-disk cache kept consistent with the sources.
+
+numba keys a cached function on its own file only, so after an edit to a function that others inline
+(``block_residual``, ``_fk_one``, ...) the callers' cached machine code is stale: it runs the old definition
+(seen here: an unknown block kind falling into another kind's branch and writing past its rows). On import, the
+package's sources are hashed; when the hash differs from the one stamped beside the cache, every cached entry of
+the package is removed and the new hash stamped. A fresh install has no entries; a read-only one keeps its own.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parent
+STAMP = PACKAGE / "__pycache__" / "numba-sources.sha256"
+
+
+def sources_hash(package: Path = PACKAGE) -> str:
+    """SHA-256 of the package's Python sources (paths and contents, in sorted order)."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def drop_stale_entries(package: Path = PACKAGE, stamp: Path = STAMP) -> int:
+    """Remove the package's cached numba entries (``*.nbi``, ``*.nbc``) if its sources changed since they were
+    stamped; returns how many files were removed (0 when the stamp matches or nothing can be written)."""
+    current = sources_hash(package)
+    try:
+        if stamp.read_text() == current:
+            return 0
+    except OSError:
+        pass
+    removed = 0
+    for pattern in ("*.nbi", "*.nbc"):
+        for entry in package.rglob(pattern):
+            try:
+                entry.unlink()
+                removed += 1
+            except OSError:
+                pass
+    try:
+        stamp.parent.mkdir(exist_ok=True)
+        stamp.write_text(current)
+    except OSError:
+        pass
+    return removed
