@@ -189,6 +189,15 @@ class Robot:
     def _frame_ids(self) -> dict[str, int]:
         return {f.name: i for i, f in enumerate(self.model.frames)}
 
+    def add_frame(self, name: str, joint_id: int, placement: pin.SE3) -> int:
+        """Add an operational frame ``name`` on joint ``joint_id`` at ``placement`` (in the joint frame) to the model,
+        unless it exists; returns its index (derived frames, e.g. the mass points of a centre-of-mass term)."""
+        if name not in self._frame_ids:
+            self.model.addFrame(pin.Frame(name, int(joint_id), placement, pin.FrameType.OP_FRAME))
+            self.__dict__.pop("_frame_ids", None)
+            self.__dict__.pop("frame_names", None)
+        return self._frame_ids[name]
+
     def frame_id(self, frame: str) -> int:
         """Pinocchio index of a frame; raises :class:`UnknownFrameError` naming close matches."""
         try:

@@ -16,7 +16,8 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | direction | cone | look_at | joint_target |
+    type = "position"                     # position | orientation | direction | cone | look_at | center_of_mass |
+                                          # joint_target |
                                           # distance | motion | relative_position | relative_pose |
                                           # joint_limits
     frame = "arm1_ee"
@@ -70,7 +71,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import (Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Position,
+from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Position,
                     RelativePose, RelativePosition)
 from .errors import MetaikError, TaskError
 from .loading import load_robot
@@ -136,6 +137,7 @@ TERM_KEYS = {
     "direction": {"frame", "direction", "axis"},
     "cone": {"frame", "direction", "axis", "max_angle"},
     "look_at": {"frame", "point", "axis"},
+    "center_of_mass": {"target", "axes"},
     "joint_target": {"group", "target"},
     "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
     "joint_limits": set(),
@@ -391,6 +393,8 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
             elif kind == "cone":
                 term = Cone(spec["frame"], value("direction"), float(value("max_angle")),
                             axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0), name=name)
+            elif kind == "center_of_mass":
+                term = CenterOfMass(value("target"), axes=str(spec.get("axes", "xyz")), name=name)
             elif kind == "look_at":
                 term = LookAt(spec["frame"], value("point"), axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0),
                               name=name)

@@ -216,7 +216,8 @@ def _curvature(program, x, mu):
     ws = workspace(program.kin, program.prog, x.size)
     linearize(x, 1, program.kin, program.prog, ws, True, 1)
     H = np.zeros((x.size, x.size))
-    block_curvature(0, mu, ws[0], ws[2], program.prog[0], program.prog[2], program.prog[5], program.prog[6], ws[3],
+    block_curvature(0, mu, ws[0], ws[2], program.prog[0], program.prog[2], program.prog[3], program.prog[5],
+                    program.prog[6], ws[3],
                     0, H)
     return H
 

@@ -107,3 +107,56 @@ def test_a_urdf_floating_joint_is_six_coordinates_and_reaches_a_pose():
     result = fw.solve(fw.Problem(robot, fw.Pose("arm", target)), "hybrid", tolerance=1e-9)
     reached = robot.frame_placement(result.configuration, "arm")
     assert result.success and np.linalg.norm(pin.log6(target.inverse() * reached)) <= 1e-9
+
+
+def test_center_of_mass_equals_pinocchio_and_its_derivatives_match_differences(talos_path, rng):
+    """The centre of mass of the free-flying Talos against ``pinocchio.centerOfMass`` of its free-flyer model;
+    Jacobian and second order against central differences; the population value equals the residual view."""
+    from framework.costs import Program
+    from framework.engine import residuals
+    from tests.test_costs import _curvature
+
+    robot = fw.load_robot(talos_path, floating_base=True)
+    full = pin.buildModelFromUrdf(str(talos_path), pin.JointModelFreeFlyer())
+    data = full.createData()
+    term = fw.CenterOfMass([0.1, -0.2, 0.8])
+    program = Program(robot, 1.0 * term)
+    h = 1e-6
+    for x in robot.random_configurations(rng, 3):
+        r, J = residuals(program, x)
+        com = pin.centerOfMass(full, data, _free_flyer_q(full, robot, x))
+        np.testing.assert_allclose(r, com - term.target, atol=1e-12)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(J, fd, atol=1e-7)
+        mu = rng.normal(size=3)
+        second = np.column_stack([(residuals(program, x + e)[1].T @ mu - residuals(program, x - e)[1].T @ mu)
+                                  / (2 * h) for e in np.eye(robot.n) * h])
+        np.testing.assert_allclose(_curvature(program, x, mu), second, atol=1e-6)
+        assert fw.Problem(robot, term).values(x[None])[0, 0] == pytest.approx(np.linalg.norm(r), abs=1e-14)
+    xy = Program(robot, 1.0 * fw.CenterOfMass([0.1, -0.2, 0.8], axes="yx"))
+    np.testing.assert_allclose(residuals(xy, x)[0], r[:2], atol=1e-15)
+
+
+def test_talos_balanced_reach(talos_path):
+    """Both soles held, the centre of mass over the middle of the feet, the left hand 0.3 m forward, motion
+    second: checked with Pinocchio's free-flyer model (poses and ``centerOfMass``)."""
+    robot = fw.load_robot(talos_path, floating_base=True)
+    x0 = robot.middle.copy()
+    x0[:6] = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    feet = {f: robot.frame_placement(x0, f) for f in ("left_sole_link", "right_sole_link")}
+    middle = 0.5 * (feet["left_sole_link"].translation + feet["right_sole_link"].translation)
+    hand = "gripper_left_base_link"
+    target = robot.frame_placement(x0, hand).translation + [0.3, 0.0, 0.0]
+    objective = [(1.0, fw.Pose(f, M)) for f, M in feet.items()] + [
+        (1.0, fw.Position(hand, target)), (1.0, fw.CenterOfMass(middle, axes="xy")), (0.1, fw.Motion("all", x0))]
+    result = fw.solve(fw.Problem(robot, objective), "hybrid", tolerance=1e-9, initial=x0)
+    assert result.success
+    full = pin.buildModelFromUrdf(str(talos_path), pin.JointModelFreeFlyer())
+    data = full.createData()
+    q = _free_flyer_q(full, robot, result.configuration)
+    pin.framesForwardKinematics(full, data, q)
+    for frame, M in feet.items():
+        assert np.linalg.norm(pin.log6(M.inverse() * data.oMf[full.getFrameId(frame)])) <= 1e-9
+    assert np.linalg.norm(data.oMf[full.getFrameId(hand)].translation - target) <= 1e-9
+    assert np.linalg.norm(pin.centerOfMass(full, data, q)[:2] - middle[:2]) <= 1e-9

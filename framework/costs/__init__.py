@@ -1,6 +1,7 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
+from .com import CenterOfMass
 from .direction import Cone, Direction, LookAt
 from .distance import Distance
 from .limits import JointLimitPenalty
@@ -14,6 +15,7 @@ from .relative import RelativePose, RelativePosition
 __all__ = [
     "LEVELS",
     "Block",
+    "CenterOfMass",
     "Cone",
     "LookAt",
     "Direction",

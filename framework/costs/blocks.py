@@ -19,6 +19,7 @@ kind            residual                                      Jacobian          
 ``RELATIVE_LOCAL``  ``R_aᵀ(p_b − p_a) − o`` (3) [m]            ``R_aᵀ(∂v + v × ω_a)``      ``o`` (3)
 ``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
 ``LOOK_AT``     ``R_a e − u``, ``u = (t − p_a)/‖t − p_a‖`` (3)  ``ω × R_a e + (I − uuᵀ)J_p,a/‖t − p_a‖``  ``e, t`` (6)
+``COM``         ``Σ_k m_k p_k − t`` on chosen axes [m]           ``Σ_k m_k J_p,k``           ``t``, axes mask, ``m_k``
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -30,7 +31,9 @@ left out: Gauss-Newton curvature in the Newton phase). ``RELATIVE_LOCAL`` / ``RE
 frame ``b`` in frame ``a`` against an offset ``(o, R_o)`` (two hands holding one object); their second order is
 left out too. ``LOOK_AT``: the frame axis ``e`` pointing at the world point ``t`` (a camera on a target); the
 residual's norm is ``2 sin(θ/2)`` of the angle θ between the axis and the line of sight (θ for small angles, no
-false minimum at θ = π); zero when the frame origin is at ``t``; its second order is left out.
+false minimum at θ = π); zero when the frame origin is at ``t``; its second order is left out. ``COM``: the centre
+of mass, a mass-weighted mean of the joints' mass points (frames at their bodies' centres of mass; their slots
+are the block's ``idx`` entries, ``m_k`` the mass fractions), on the axes of a 0/1 mask (rows: the mask's sum).
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -43,7 +46,7 @@ import numpy as np
 
 # Block kinds
 (POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
- LOOK_AT) = range(11)
+ LOOK_AT, COM) = range(12)
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -171,6 +174,8 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
         cone_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == LOOK_AT:
         look_at_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == COM:
+        com_residual(out, Jf, bint[b, IPTR], bint[b, COUNT], idx, params, p, r, Jr, row, want_jacobian, n)
     elif kind == RELATIVE_LOCAL:
         v0, v1, v2 = out[fb, 9] - out[fa, 9], out[fb, 10] - out[fa, 10], out[fb, 11] - out[fa, 11]
         for c in range(3):  # R_aᵀ v: column c of R_a (row-major) dotted with v
@@ -361,6 +366,27 @@ def look_at_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n) -> No
 
 
 @numba.njit(cache=True)
+def com_residual(out, Jf, q, count, idx, params, p, r, Jr, row, want_jacobian, n) -> None:
+    """The ``COM`` residual ``Σ_k m_k p_k − t`` on the masked axes and its Jacobian ``Σ_k m_k J_p,k``; the mass
+    points' frame slots are ``idx[q:q + count]``; params ``t (3), mask (3), m (count)``."""
+    k = row
+    for c in range(3):
+        if params[p + 3 + c] == 0.0:
+            continue
+        v = -params[p + c]
+        for s in range(count):
+            v += params[p + 6 + s] * out[idx[q + s], 9 + c]
+        r[k] = v
+        if want_jacobian:
+            for i in range(n):
+                g = 0.0
+                for s in range(count):
+                    g += params[p + 6 + s] * Jf[idx[q + s], c, i]
+                Jr[k, i] = g
+        k += 1
+
+
+@numba.njit(cache=True)
 def rho_value(rho, scale, r, row, rows) -> float:
     """The value of a block from its residual ``r[row:row + rows]``."""
     if rho == L1:
@@ -431,7 +457,7 @@ def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H, majorize_below=0.
 
 
 @numba.njit(cache=True)
-def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, H):
+def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, row, H):
     """Add ``Σ_c mu_c ∇²r_c`` of block ``b`` (multipliers ``mu (rows,)``) to ``H (n, n)``.
 
     From the product of exponentials at ``x``: with ``ω_i`` the world axis of coordinate ``i`` (zero for
@@ -442,6 +468,18 @@ def block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, 
     kind = bint[b, KIND]
     if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION \
             or kind == LOOK_AT:
+        return
+    if kind == COM:  # Σ_k m_k μ·∂²p_k, exact
+        p, q, count = bint[b, PPTR], bint[b, IPTR], bint[b, COUNT]
+        m = np.zeros(3)
+        k = row
+        for c in range(3):
+            if params[p + 3 + c] != 0.0:
+                m[c] = mu[k - row]
+                k += 1
+        for s in range(count):
+            w = params[p + 6 + s]
+            _position_curvature(idx[q + s], w * m[0], w * m[1], w * m[2], Jf, chain_ptr, chain_idx, H)
         return
     if kind == ORIENTATION:
         p, fa = bint[b, PPTR], bint[b, FA]

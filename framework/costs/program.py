@@ -101,6 +101,9 @@ class _Layout:
                 if block.kind == B.COORDINATES:
                     indices.append(np.asarray(block.indices, dtype=np.int64))
                     count = indices[-1].size
+                elif block.kind == B.COM:  # the mass points' frame slots
+                    indices.append(np.array([slot[f] for f in block.frames], dtype=np.int64))
+                    count = indices[-1].size
                 size = int(np.size(block.params))
                 fa = slot[block.frames[0]] if block.frames else -1
                 fb = slot[block.frames[1]] if len(block.frames) > 1 else -1

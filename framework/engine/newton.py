@@ -86,7 +86,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
         if curvature:
             for a in range(rows):
                 mu[a] = w * gr[a]
-            block_curvature(b, mu, out, Jf, bint, params, chain_ptr, chain_idx, r, row, H)
+            block_curvature(b, mu, out, Jf, bint, params, prog[3], chain_ptr, chain_idx, r, row, H)
         row += rows
     return value
 
@@ -201,7 +201,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             rows = bint[b, ROWS]
             for a in range(rows):
                 lam_neg[row + a] = -lam[row + a]
-            block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], chain_ptr, chain_idx, cur[3], row, Hlb)
+            block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], prog[3], chain_ptr, chain_idx, cur[3], row,
+                            Hlb)
             row += rows
         A = cur[4]
         for a in range(nf):

@@ -1,0 +1,69 @@
+"""Centre of mass: the robot's mass-weighted mean of its bodies' centres of mass, on chosen axes (over the
+support polygon of a humanoid's feet: the ``xy`` axes)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import TaskError
+from ..robot import Robot
+from . import blocks as B
+from .base import Term, as_vector
+from .program import Block
+
+
+def mass_points(robot: Robot) -> tuple[tuple[str, ...], np.ndarray]:
+    """Frames at the centre of mass of every joint's bodies (Pinocchio's per-joint inertia: the links it moves,
+    with those of fixed and locked joints merged in; the universe's for the fixed ones), added to the robot's
+    model on first use as ``com[<joint>]``, and their masses' fractions (summing to 1)."""
+    model = robot.model
+    names, masses = [], []
+    for jid in range(model.njoints):
+        inertia = model.inertias[jid]
+        if inertia.mass <= 0.0:
+            continue
+        name = f"com[{model.names[jid]}]"
+        robot.add_frame(name, jid, pin.SE3(np.eye(3), inertia.lever))
+        names.append(name)
+        masses.append(inertia.mass)
+    if not masses:
+        raise TaskError(f"robot {robot.name!r} has no mass (no <inertial> in its URDF): no centre of mass")
+    masses = np.array(masses)
+    return tuple(names), masses / masses.sum()
+
+
+class CenterOfMass(Term):
+    """The centre of mass [m, world] at ``target`` on ``axes`` (a subset of ``"xyz"``; ``"xy"`` keeps it over a
+    point of the support polygon whatever its height).
+
+    Residual (len(axes),): the centre of mass minus the target on those axes; value its norm; a task term held to
+    the linear tolerance. Masses and centres of mass come from the URDF's ``<inertial>`` (Pinocchio's model).
+    """
+
+    level = "task"
+    has_target = True
+
+    def __init__(self, target: Sequence[float], *, axes: str = "xyz", name: str | None = None):
+        if not axes or set(axes) - set("xyz") or len(set(axes)) != len(axes):
+            raise TaskError(f"centre-of-mass axes must be a subset of 'xyz'; got {axes!r}")
+        self.axes = "".join(a for a in "xyz" if a in axes)
+        self.frames = ()
+        self.name = name or f"com[{self.axes}]"
+        self.set_target(target)
+
+    def set_target(self, target: Sequence[float]) -> None:
+        """Move the target point (3,) [m, world]; only its ``axes`` count."""
+        self.target = as_vector(target, 3, "centre-of-mass target")
+        self._touch()
+
+    def blocks(self, robot: Robot) -> tuple[Block, ...]:
+        names, fractions = mass_points(robot)
+        mask = [float(a in self.axes) for a in "xyz"]
+        params = np.concatenate([self.target, mask, fractions])
+        return (Block(B.COM, B.NORM, len(self.axes), names, params, tolerance=B.TOL_LINEAR),)
+
+    def __repr__(self) -> str:
+        return f"CenterOfMass({np.round(self.target, 6).tolist()}, axes={self.axes!r})"
