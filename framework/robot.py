@@ -193,7 +193,8 @@ class Robot:
         """Add an operational frame ``name`` on joint ``joint_id`` at ``placement`` (in the joint frame) to the model,
         unless it exists; returns its index (derived frames, e.g. the mass points of a centre-of-mass term)."""
         if name not in self._frame_ids:
-            self.model.addFrame(pin.Frame(name, int(joint_id), placement, pin.FrameType.OP_FRAME))
+            joint_frame = self.model.getFrameId(self.model.names[int(joint_id)]) if joint_id else 0
+            self.model.addFrame(pin.Frame(name, int(joint_id), joint_frame, placement, pin.FrameType.OP_FRAME))
             self.__dict__.pop("_frame_ids", None)
             self.__dict__.pop("frame_names", None)
         return self._frame_ids[name]

@@ -30,6 +30,7 @@ def test_the_learning_path_is_complete():
         "02_mobile_dual_arm",
         "03_new_robot",
         "04_compare_solvers",
+        "05_real_robots",
     ]
 
 
