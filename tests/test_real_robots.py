@@ -1,0 +1,59 @@
+"""Two-hand tasks on example-robot-data's robots, loaded as they are (other joints locked, mimic grippers, a
+floating base): both hands at full poses reachable by construction, motion minimized second; every pose checked
+with Pinocchio's FK of the full model (the URDF built by Pinocchio itself, locked joints at their values)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+
+ARM7 = [f"arm_{{side}}_{k}_joint" for k in range(1, 8)]
+ROBOTS = {
+    "pr2": ("pr2_description/urdf/pr2.urdf", ["torso_lift_joint"] + [
+        f"{s}_{j}_joint" for s in "lr" for j in ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex",
+                                                   "forearm_roll", "wrist_flex", "wrist_roll")],
+            ("l_gripper_tool_frame", "r_gripper_tool_frame")),
+    "tiago_dual": ("tiago_description/robots/tiago_dual.urdf",
+                   ["torso_lift_joint"] + [j.format(side=s) for s in ("left", "right") for j in ARM7],
+                   ("arm_left_tool_link", "arm_right_tool_link")),
+    "baxter": ("baxter_description/urdf/baxter.urdf",
+               [f"{s}_{j}" for s in ("left", "right") for j in ("s0", "s1", "e0", "e1", "w0", "w1", "w2")],
+               ("left_gripper", "right_gripper")),
+    "talos": ("talos_data/robots/talos_reduced.urdf",
+              ["torso_1_joint", "torso_2_joint"] + [j.format(side=s) for s in ("left", "right") for j in ARM7],
+              ("wrist_left_ft_tool_link", "wrist_right_ft_tool_link")),
+}
+
+
+@pytest.mark.parametrize("name", list(ROBOTS))
+def test_two_hands_at_full_poses_with_motion_second(erd, name):
+    path, joints, hands = ROBOTS[name]
+    robot = fw.load_robot(erd / path, joints=joints, end_effectors=list(hands))
+    rng = np.random.default_rng(3)
+    start = robot.middle.copy()
+    x_goal = robot.random_configurations(rng, 1)[0]
+    targets = {hand: robot.frame_placement(x_goal, hand) for hand in hands}
+    objective = [(2.0, fw.Pose(hand, M)) for hand, M in targets.items()] + [(0.1, fw.Motion("all", start))]
+    result = fw.solve(fw.Problem(robot, objective), seed=0, tolerance=1e-9)
+    assert result.success, result.errors
+    # Pinocchio's own model of the whole URDF: solved joints from the answer, locked ones at their values,
+    # mimic joints from their leaders
+    full = pin.buildModelFromXML(robot.urdf)
+    data = full.createData()
+    values = dict(robot.locked)
+    values.update({j.name: result.configuration[j.index] for j in robot.joints})
+    values.update({m.name: m.multiplier * values[m.leader] + m.offset for m in robot.mimics})
+    q = pin.neutral(full)
+    for joint, value in values.items():
+        jm = full.joints[full.getJointId(joint)]
+        q[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(value), np.sin(value)] if jm.nq == 2 else [value]
+    pin.framesForwardKinematics(full, data, q)
+    for hand, M in targets.items():
+        error = pin.log6(M.inverse() * data.oMf[full.getFrameId(hand)])
+        assert np.linalg.norm(error.linear) <= 1e-9 and np.linalg.norm(error.angular) <= 1e-9, (hand, error)
+    # motion second: no more motion than the configuration the targets came from, which reaches them too
+    goal_motion = fw.Problem(robot, fw.Motion("all", start)).values(x_goal[None])[0, 0]
+    assert result.terms["motion[all]"] <= goal_motion + 1e-9
