@@ -60,7 +60,8 @@ class Problem:
         priorities: ``True`` (default): the task terms come first, whatever the weights — the local solvers reach
             the task and minimize the regularizers without leaving it. ``False`` (the papers' weighted sums):
             the weighted sum is what counts, so with small task weights the optimum may stop short of a
-            reachable target. Metaheuristics minimize the weighted sum either way.
+            reachable target. Metaheuristics minimize the weighted sum, or with ``options={"ranking":
+            "feasibility"}`` rank by Deb's rules on these levels (the task's tolerances first).
 
     Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
     """

@@ -196,3 +196,21 @@ def test_hybrid_starts_from_q_prev_and_escalates_when_that_basin_misses():
             assert auto.cost <= basin.cost + 1e-12
             rescued += auto.success
     assert missed >= 1 and rescued == missed
+
+
+@pytest.mark.parametrize("solver", ["cmaes_fast", "de"])
+def test_feasibility_ranking_reaches_what_the_weighted_sum_trades_away(solver):
+    """A reachable target with a small weight beside a heavy motion term: ranked by the weighted sum, the
+    metaheuristic stops short of it (its optimum does, 0.17 m off); ranked by Deb's rules (feasibility first) it
+    meets the tolerance, then spends less motion than the configuration the target came from."""
+    arm = fw.load_robot("youbot_arm")
+    x_goal = arm.random_configurations(np.random.default_rng(1), 1)[0]
+    target = arm.frame_placement(x_goal, "ee").translation
+    problem = fw.Problem(arm, 0.05 * fw.Position("ee", target) + 1.0 * fw.Motion("all", arm.middle))
+    runs = {ranking: fw.solve(problem, solver, seed=0, max_iterations=300, tolerance=1e-4,
+                              options={"ranking": ranking}) for ranking in ("weighted", "feasibility")}
+    assert not runs["weighted"].success and runs["weighted"].terms["position[ee]"] > 0.1
+    assert runs["feasibility"].success and runs["feasibility"].terms["position[ee]"] <= 1e-4
+    assert runs["feasibility"].terms["motion[all]"] < np.linalg.norm(x_goal - arm.middle)
+    with pytest.raises(fw.SolverError, match="ranking"):
+        fw.solve(problem, solver, options={"ranking": "lexical"})

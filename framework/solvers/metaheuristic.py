@@ -1,4 +1,13 @@
-"""Every registered metaheuristic as an IK solver: the shared ask/tell loop on the problem's population cost."""
+"""Every registered metaheuristic as an IK solver: the shared ask/tell loop on the problem's population cost.
+
+Candidates are ranked by the weighted sum (``ranking="weighted"``, the papers), or, with
+``options={"ranking": "feasibility"}`` on a problem with priorities, by Deb's rules: a candidate meeting every
+task tolerance beats one that does not; among those that do, the lower regularizer cost wins; among those that do
+not, the lower task cost (K. Deb, "An efficient constraint handling method for genetic algorithms", Comput.
+Methods Appl. Mech. Eng. 186 (2000) 311-338). The rules are one scalar per candidate, so every algorithm ranks by
+them unchanged: the regularizer cost for feasible candidates, and an upper bound of it plus the task cost for the
+others (the history is then in those units).
+"""
 
 from __future__ import annotations
 
@@ -8,13 +17,15 @@ from typing import Any
 
 import numpy as np
 
-
+from ..errors import SolverError
 from .base import Box, OptimizeResult, minimize
 from .ik import IKSolver, Outcome, Request
 from .registry import get_solver
 
 #: Generations of a metaheuristic when ``solve`` is not given a budget (the papers' 1000).
 DEFAULT_ITERATIONS = 1000
+#: How candidates are ranked: the weighted sum, or Deb's feasibility rules on the priority levels.
+RANKINGS = ("weighted", "feasibility")
 
 
 class Metaheuristic(IKSolver):
@@ -32,9 +43,14 @@ class Metaheuristic(IKSolver):
         self.options = dict(options or {})
 
     def defaults(self) -> dict[str, Any]:  # type: ignore[override]
-        return dict(get_solver(self.algorithm).DEFAULTS)
+        return {**get_solver(self.algorithm).DEFAULTS, "ranking": "weighted"}
 
     def solve(self, problem, request: Request) -> Outcome:
+        options = dict(self.options)
+        ranking = options.pop("ranking", "weighted")
+        if ranking not in RANKINGS:
+            raise SolverError(f"{self.name}: ranking must be one of {RANKINGS}; got {ranking!r}")
+        cost = feasibility_cost(problem, request) if ranking == "feasibility" and problem.priorities else None
         callback = request.callback
         if request.stop_at_tolerance or request.deadline is not None:
             user = request.callback
@@ -46,11 +62,11 @@ class Metaheuristic(IKSolver):
                 return stop or (request.stop_at_tolerance and within(problem, best_x, request))
 
         iterations = DEFAULT_ITERATIONS if request.max_iterations is None else request.max_iterations
-        if callback is None and not request.progress:
-            run = compiled_or_loop(self.algorithm, problem, request, iterations, self.options)
+        if callback is None and not request.progress and cost is None:
+            run = compiled_or_loop(self.algorithm, problem, request, iterations, options)
         else:
-            run = shared_loop(self.algorithm, problem, request, iterations, self.options, callback=callback,
-                              progress=request.progress)
+            run = shared_loop(self.algorithm, problem, request, iterations, options, callback=callback,
+                              progress=request.progress, cost=cost)
         stop = run.stop_reason
         if stop == "callback":
             if request.stop_at_tolerance and within(problem, run.x, request):
@@ -69,12 +85,37 @@ def within(problem, x: np.ndarray, request: Request) -> bool:
                                   request.angle_tolerance)
 
 
+def feasibility_cost(problem, request: Request) -> Callable[[np.ndarray], np.ndarray]:
+    """Deb's rules as a population cost ``(pop, n) -> (pop,)``: the weighted regularizers where every task block
+    is within the request's tolerances, else ``bound + `` the weighted task terms, with ``bound`` above any
+    regularizer cost in the box (every regularizer value is at most its value's scale times the box diagonal)."""
+    from ..engine import task_errors
+
+    task = problem.task_mask
+    weights = problem.weights
+    diagonal = float(np.linalg.norm(problem.robot.upper - problem.robot.lower))
+    bound = 10.0 * (1.0 + weights[~task].sum() * (1.0 + diagonal))
+    program = problem.program
+
+    def cost(X: np.ndarray) -> np.ndarray:
+        values = problem.values(X)
+        F = values[:, ~task] @ weights[~task]
+        for i, x in enumerate(X):
+            errors = task_errors(program, x).tolist()
+            if not program.within(errors, request.tolerance, request.angle_tolerance):
+                F[i] = bound + values[i, task] @ weights[task]
+        return F
+
+    return cost
+
+
 def shared_loop(name: str, problem, request: Request, iterations: int, options: Mapping[str, Any] | None, *,
-                callback: Callable | None = None, progress: bool = False) -> OptimizeResult:
-    """``iterations`` generations of the metaheuristic ``name`` on the problem's population cost, in the
-    shared ask/tell loop (:func:`~framework.solvers.base.minimize`), from the request's warm starts and
+                callback: Callable | None = None, progress: bool = False,
+                cost: Callable[[np.ndarray], np.ndarray] | None = None) -> OptimizeResult:
+    """``iterations`` generations of the metaheuristic ``name`` on the problem's population cost (or ``cost``),
+    in the shared ask/tell loop (:func:`~framework.solvers.base.minimize`), from the request's warm starts and
     generator."""
-    return minimize(problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
+    return minimize(cost or problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
                     max_iterations=iterations, population=request.population, initial=request.initial,
                     bounds=problem.repair_mode, options=options, callback=callback, progress=progress)
 
