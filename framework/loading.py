@@ -9,6 +9,7 @@ outside them) and folded into fixed placements by Pinocchio's ``buildReducedMode
 
 from __future__ import annotations
 
+import re
 import sys
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
@@ -211,7 +212,7 @@ def robot_from_urdf(
         raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve")
     lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
     if end_effectors is None:
-        end_effectors = _leaf_frames(model)
+        end_effectors = _leaf_frames(model, robot_joints)
     robot = Robot(
         name=name,
         model=model,
@@ -326,16 +327,39 @@ def _locked_value(value, joint: str, lo: float, hi: float, *, bounded: bool) -> 
     return value
 
 
-def _leaf_frames(model: pin.Model) -> list[str]:
-    """Default end-effectors: for each joint with no child joint, the last body frame attached to it."""
-    has_child = {model.parents[j] for j in range(1, model.njoints)}
+#: Frame names that say "sensor", never a default end-effector.
+SENSOR_NAMES = re.compile(r"camera|optical|rgb|depth|laser|lidar|sonar|imu|kinect|xtion|microphone|sensor|(^|_)ft(_|$)")
+#: Frame names that say "tool", best first: the default end-effector of a chain is the first frame matching the
+#: first pattern that any of its frames matches, else its last body frame.
+TOOL_NAMES = tuple(re.compile(p) for p in (r"tcp|tool_frame|end_?effector|grasp", r"tool", r"(gripper|hand)$",
+                                             r"palm"))
+
+
+def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:
+    """Default end-effectors: for each solved joint without a solved descendant (a chain's end; wheels and
+    casters — chains of continuous joints only — left out), its tool frame by name (:data:`TOOL_NAMES`), else
+    its last body frame; sensor frames never."""
+    solved = {j.pin_id: j for j in joints}
+    ancestors = {jid: set() for jid in solved}
+    for jid in solved:
+        parent = model.parents[jid]
+        while parent > 0:
+            ancestors[jid].add(parent)
+            parent = model.parents[parent]
+    has_solved_child = {a for jid in solved for a in ancestors[jid]}
     leaves = []
-    for jid in range(1, model.njoints):
-        if jid in has_child:
+    for jid, joint in solved.items():
+        if jid in has_solved_child:
             continue
-        bodies = [f.name for f in model.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY]
-        if bodies:
-            leaves.append(bodies[-1])
+        chain = [solved[a] for a in ancestors[jid] if a in solved] + [joint]
+        if all(j.kind.value == "continuous" for j in chain):
+            continue  # a wheel or a caster: continuous joints all the way from the root
+        frames = [f for f in model.frames if f.parentJoint == jid and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
+                  and not SENSOR_NAMES.search(f.name)]
+        chosen = next((f.name for pattern in TOOL_NAMES for f in frames if pattern.search(f.name)), None)
+        bodies = [f.name for f in frames if f.type == pin.FrameType.BODY]
+        if chosen or bodies:
+            leaves.append(chosen or bodies[-1])
     return leaves
 
 

@@ -57,3 +57,23 @@ def test_two_hands_at_full_poses_with_motion_second(erd, name):
     # motion second: no more motion than the configuration the targets came from, which reaches them too
     goal_motion = fw.Problem(robot, fw.Motion("all", start)).values(x_goal[None])[0, 0]
     assert result.terms["motion[all]"] <= goal_motion + 1e-9
+
+
+@pytest.mark.parametrize("name, expected", [
+    ("pr2", ("l_gripper_tool_frame", "r_gripper_tool_frame")),
+    ("tiago_dual", ("hand_left_grasping_frame", "hand_right_grasping_frame")),
+    ("baxter", ("left_gripper", "right_gripper")),
+])
+def test_default_end_effectors_are_the_tools_of_the_solved_chains(erd, name, expected):
+    path, joints, _ = ROBOTS[name]
+    assert fw.load_robot(erd / path, joints=joints).end_effectors == expected
+
+
+@pytest.mark.parametrize("path", ["pr2_description/urdf/pr2.urdf", "tiago_description/robots/tiago_dual.urdf",
+                                  "talos_data/robots/talos_reduced.urdf"])
+def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
+    from framework.loading import SENSOR_NAMES
+
+    robot = fw.load_robot(erd / path)
+    assert robot.end_effectors and not [f for f in robot.end_effectors if SENSOR_NAMES.search(f)]
+    assert not [f for f in robot.end_effectors if "caster" in f]
