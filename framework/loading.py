@@ -368,8 +368,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
 
     Given groups must name solved joints (``strict``; a robot index's groups keep the members that are solved).
 
-    Derived groups: joints shared by every end-effector chain form ``"base"`` (when there are several
-    end-effectors); each chain's remaining joints form a group named after its end-effector frame.
+    Derived groups: joints shared by every end-effector chain (when there are several end-effectors) form one
+    group, ``"base"`` when it starts with a mobile base (a planar joint or a floating base), else named after the
+    link of its first joint (``"torso_lift_link"``); each chain's remaining joints form a group named after the
+    link of its first joint (``"l_shoulder_pan_link"``).
     """
     from dataclasses import replace
 
@@ -396,12 +398,29 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
             chains.append(chain[::-1])
         shared = set.intersection(*map(set, chains)) if len(chains) > 1 else set()
         if shared:
-            result["base"] = _coords(robot, [j for j in chains[0] if j in shared])
+            first = [j for j in chains[0] if j in shared]
+            mobile = robot.joint(first[0]).kind.value == "planar" or first[0] in floating_names(robot)
+            result["base" if mobile else _link_of(robot, first[0])] = _coords(robot, first)
         for frame, chain in zip(robot.end_effectors, chains):
             own = [j for j in chain if j not in shared]
             if own:
-                result[frame] = _coords(robot, own)
+                name = _link_of(robot, own[0])
+                result[name if name not in result else frame] = _coords(robot, own)
     return replace(robot, groups=result)
+
+
+def _link_of(robot: Robot, joint: str) -> str:
+    """The link a joint moves (its first body frame), or the joint's name."""
+    jid = robot.model.getJointId(joint)
+    return next((f.name for f in robot.model.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY), joint)
+
+
+def floating_names(robot: Robot) -> set[str]:
+    """The six joints of every floating base of ``robot`` (see :mod:`framework.floating`)."""
+    from .floating import AXES
+
+    return {j.name for j in robot.joints if j.name.endswith(f"_{AXES[0][0]}")
+            and all(f"{j.name[:-2]}_{axis}" in robot.joint_names for axis, _, _ in AXES)}
 
 
 def _coords(robot: Robot, joint_names: Sequence[str]) -> np.ndarray:
