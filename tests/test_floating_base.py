@@ -139,15 +139,16 @@ def test_center_of_mass_equals_pinocchio_and_its_derivatives_match_differences(t
 
 
 def test_talos_balanced_reach(talos_path):
-    """Both soles held, the centre of mass over the middle of the feet, the left hand 0.3 m forward, motion
-    second: checked with Pinocchio's free-flyer model (poses and ``centerOfMass``)."""
+    """Standing (every joint at 0, the pelvis 1 m up), both soles held, the centre of mass over the middle of the
+    feet, the left hand 0.5 m forward, motion second: checked with Pinocchio's free-flyer model (poses and
+    ``centerOfMass``)."""
     robot = fw.load_robot(talos_path, floating_base=True)
-    x0 = robot.middle.copy()
+    x0 = np.clip(np.zeros(robot.n), robot.lower, robot.upper)
     x0[:6] = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
     feet = {f: robot.frame_placement(x0, f) for f in ("left_sole_link", "right_sole_link")}
     middle = 0.5 * (feet["left_sole_link"].translation + feet["right_sole_link"].translation)
     hand = "gripper_left_base_link"
-    target = robot.frame_placement(x0, hand).translation + [0.3, 0.0, 0.0]
+    target = robot.frame_placement(x0, hand).translation + [0.5, 0.0, 0.0]
     objective = [(1.0, fw.Pose(f, M)) for f, M in feet.items()] + [
         (1.0, fw.Position(hand, target)), (1.0, fw.CenterOfMass(middle, axes="xy")), (0.1, fw.Motion("all", x0))]
     result = fw.solve(fw.Problem(robot, objective), "hybrid", tolerance=1e-9, initial=x0)
