@@ -1,0 +1,70 @@
+"""Collision checks on the exact geometry: distances against a closed form (two spheres on a two-joint arm),
+pairs (adjacent bodies and bodies fixed to each other excluded, SRDF pairs removed) and real robots."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+import framework as fw
+from framework.collision import RobotShape
+from framework.errors import RobotFileError
+
+R, L = 0.1, 0.3
+SPHERES = f"""<robot name="spheres">
+  <link name="base"><collision><origin xyz="{L} 0 0"/><geometry><sphere radius="{R}"/></geometry></collision></link>
+  <link name="upper"/>
+  <link name="fore"><collision><origin xyz="{L} 0 0"/><geometry><sphere radius="{R}"/></geometry></collision></link>
+  <link name="cap"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="fixed" type="fixed"><parent link="fore"/><child link="cap"/></joint>
+</robot>"""
+
+
+def test_sphere_distances_equal_the_closed_form():
+    """The forearm's sphere turns about z at L from the axis; the base's sits at L: distance
+    2 L |sin((θ1 + θ2)/2)| − 2R, contacts exactly when that is negative."""
+    robot = fw.robot_from_urdf(SPHERES)
+    shape = RobotShape(robot)
+    assert shape.pairs == (("base_0", "fore_0"), ("base_0", "cap_0"))
+    for theta in np.linspace(-2.9, 2.9, 41):
+        x = np.array([theta / 2, theta / 2])
+        expected = 2 * L * abs(np.sin(theta / 2)) - 2 * R
+        report = shape.check(x)
+        distances = {frozenset((c.a, c.b)): c.distance for c in shape.check(x, margin=10.0).contacts}
+        assert distances[frozenset(("base_0", "fore_0"))] == pytest.approx(expected, abs=1e-9)
+        assert report.colliding == (expected < 0)
+
+
+def test_pairs_leave_out_adjacent_and_fixed_together_bodies():
+    robot = fw.robot_from_urdf(SPHERES)
+    pairs = {frozenset(p) for p in RobotShape(robot).pairs}
+    assert frozenset(("fore_0", "cap_0")) not in pairs  # the same body (a fixed joint between them)
+    assert frozenset(("base_0", "fore_0")) in pairs  # two joints apart
+    locked = fw.robot_from_urdf(SPHERES, locked={"elbow": 0.0})
+    assert {frozenset(p) for p in RobotShape(locked).pairs} == set()  # base and fore: one joint apart now
+
+
+def test_panda_srdf_pairs_are_not_checked(erd):
+    path = erd / "panda_description" / "urdf" / "panda.urdf"
+    srdf = erd / "panda_description" / "srdf" / "panda.srdf"
+    robot = fw.load_robot(path)
+    every = RobotShape(robot)
+    reduced = RobotShape(robot, srdf=srdf)
+    disabled = {frozenset(m) for m in re.findall(r'link1="([^"]+)"\s+link2="([^"]+)"', srdf.read_text())}
+    link = {g.name: robot.model.frames[g.parentFrame].name for g in reduced.geometry.geometryObjects}
+    assert len(reduced.pairs) < len(every.pairs)
+    assert not [p for p in reduced.pairs if frozenset((link[p[0]], link[p[1]])) in disabled]
+    assert not reduced.check(robot.middle).colliding
+    with pytest.raises(RobotFileError, match="SRDF"):
+        RobotShape(robot, srdf=path.parent / "none.srdf")
+
+
+def test_no_collision_geometry_is_our_error():
+    with pytest.raises(RobotFileError, match="no <collision>"):
+        RobotShape(fw.load_robot("youbot_arm"))
