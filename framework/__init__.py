@@ -31,6 +31,7 @@ from .problem import Evaluation, Problem
 from .robot import Joint, JointKind, Robot
 from .solve import IKResult, solve
 from .batch import BatchResult, solve_batch
+from .collision import CollisionReport, Contact, RobotShape
 from .solvers import solver_names
 
 __version__ = "0.1.0"
@@ -40,6 +41,8 @@ __all__ = [
     "Evaluation",
     "IKResult",
     "CenterOfMass",
+    "CollisionReport",
+    "Contact",
     "Cone",
     "LookAt",
     "Direction",
@@ -67,6 +70,7 @@ __all__ = [
     "Mount",
     "ResourceError",
     "Robot",
+    "RobotShape",
     "RobotFileError",
     "SolverError",
     "TaskError",
