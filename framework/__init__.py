@@ -10,7 +10,7 @@ from .numba_cache import drop_stale_entries
 drop_stale_entries()  # before any compiled function loads: cached code of edited sources is dropped
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
+from .costs import (CenterOfMass, SelfCollision, SphereObstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -70,6 +70,8 @@ __all__ = [
     "Mount",
     "ResourceError",
     "Robot",
+    "SelfCollision",
+    "SphereObstacles",
     "RobotShape",
     "RobotFileError",
     "SolverError",

@@ -1,6 +1,7 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
+from .collision import SelfCollision, SphereObstacles
 from .com import CenterOfMass
 from .direction import Cone, Direction, LookAt
 from .distance import Distance
@@ -27,6 +28,8 @@ __all__ = [
     "Orientation",
     "Pose",
     "Position",
+    "SelfCollision",
+    "SphereObstacles",
     "Program",
     "RelativePose",
     "RelativePosition",
