@@ -14,7 +14,6 @@ from rich.console import Console
 
 from framework.bench import (
     RunRecord,
-    add_bench_command,
     downsample,
     drop_runs,
     expand_task,
@@ -25,6 +24,7 @@ from framework.bench import (
     run_grid,
     write_report,
 )
+from framework.cli.bench import add_bench_command
 from framework.errors import TaskError
 from framework.resources import data_dir
 from framework.stats import sign_rows, summary_rows

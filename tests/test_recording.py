@@ -16,15 +16,14 @@ from framework.problem import Problem
 from framework.recording import (
     Recorder,
     RecordingError,
-    add_replay_command,
     entity_name,
     read_recording,
     record_solve,
     record_task,
     replay,
-    replay_command,
     replay_command_line,
 )
+from framework.cli.replay import add_replay_command, replay_command
 from framework.solve import solve
 from framework.solvers import minimize
 from framework.taskfile import load_task

@@ -26,7 +26,6 @@ most the runs in flight); re-running the same grid skips the runs already in the
 then writes the summary tables (Markdown, CSV), the sign tests, boxplots and convergence curves.
 """
 
-from .command import add_bench_command, bench_command, command_line
 from .grid import (BENCH_KEYS, GRID_LIMIT, GROUP_BY, HISTORY_POINTS, ROBOT_OPTIONS, BenchCase, BenchTask, Grid,
                    RunSpec, RunSpecs, expand_task, plan, problem_fingerprint, random_reachable_cases)
 from .record import RunRecord, downsample, execute
@@ -36,7 +35,7 @@ from .runner import RunReport, run_grid
 from .store import drop_runs, grid_records, read_results
 
 __all__ = ["BENCH_KEYS", "GRID_LIMIT", "GROUP_BY", "HISTORY_POINTS", "NOTES_MARKER", "ROBOT_OPTIONS", "BenchCase",
-           "BenchTask", "Grid", "RunRecord", "RunReport", "RunSpec", "RunSpecs", "add_bench_command",
-           "bench_command", "command_line", "doc_figures", "downsample", "drop_runs", "execute", "expand_task",
+           "BenchTask", "Grid", "RunRecord", "RunReport", "RunSpec", "RunSpecs", "doc_figures", "downsample",
+           "drop_runs", "execute", "expand_task",
            "grid_markdown", "grid_records", "machine", "plan", "problem_fingerprint", "random_reachable_cases",
            "read_results", "report_markdown", "run_grid", "write_doc", "write_report"]

@@ -31,9 +31,9 @@ draws it: links as segments between frame origins, plus the URDF's meshes where 
 """
 
 from .reader import Recording, intact_messages, read_recording, repair_recording
-from .replay import add_replay_command, replay, replay_command, replay_command_line
+from .replay import replay, replay_command_line
 from .writer import Recorder, entity_name, mesh_bytes, record_solve, record_task
 from ..errors import RecordingError
 
-__all__ = ["Recorder", "Recording", "RecordingError", "add_replay_command", "entity_name", "mesh_bytes",
-           "intact_messages", "read_recording", "record_solve", "repair_recording", "record_task", "replay", "replay_command", "replay_command_line"]
+__all__ = ["Recorder", "Recording", "RecordingError", "entity_name", "intact_messages", "mesh_bytes",
+           "read_recording", "record_solve", "record_task", "repair_recording", "replay", "replay_command_line"]

@@ -1,15 +1,10 @@
-"""The ``metaik`` command line: ``robots``, ``show ROBOT``, ``tasks``, ``solvers``, ``run TASK``, ``bench TASK...``,
-``reach ROBOT``, ``replay FILE``.
+"""``metaik run TASK``: an IK task's cases, a tracking task's paths, a reach or placement task; tables, CSV,
+recording."""
 
-Exit codes: 0 success; 1 the run finished but some case missed its tolerance; 2 bad input (missing file,
-bad TOML, unknown robot/solver/frame, invalid weights: one clear line, no traceback); 130 interrupted.
-"""
 
 from __future__ import annotations
 
-import argparse
 import sys
-from collections.abc import Sequence
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
@@ -18,132 +13,18 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from .bench import add_bench_command, bench_command
-from .errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError, TaskError
-from .fabrik.taskfile import ReachTask
-from .placement_taskfile import PlacementTask
-from .reach_cli import add_reach_command, reach_command, run_placement
-from .recording import Recorder, add_replay_command, replay_command
-from .solve import DEFAULT_SOLVER
-from .taskfile import resolve_task
+from ..errors import EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, TaskError
+from ..fabrik.taskfile import ReachTask
+from ..placement_taskfile import PlacementTask
+from .reach import run_placement
+from ..recording import Recorder
+from ..solve import DEFAULT_SOLVER
+from ..taskfile import resolve_task
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="metaik", description="Inverse kinematics by optimization for any URDF robot."
-    )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    sub.add_parser("robots", help="list the shipped robots (DOF, end-effectors, groups)")
-
-    show = sub.add_parser("show", help="describe a robot: joints, bounds, frames, groups")
-    show.add_argument("robot", help="robot index name or URDF/xacro path")
-
-    run = sub.add_parser("run", help="solve a task file (a path, or the name of a shipped task)")
-    run.add_argument("task", help="task file (.toml) or shipped task name, e.g. youbot_dual_coordinated_ik")
-    run.add_argument("--solver", help="override the task's solver (e.g. hybrid, cmaes, de, sde)")
-    run.add_argument("--seed", type=int, help="override the seed")
-    run.add_argument("--iterations", type=int, help="override max_iterations")
-    run.add_argument("--population", type=int, help="override the population size")
-    run.add_argument("--case", action="append", help="only these cases (by name); repeatable")
-    run.add_argument("--points", type=int, help="tracking tasks: number of waypoints (re-samples the path)")
-    run.add_argument("--no-progress", action="store_true", help="tracking and reach tasks: no progress bar")
-    run.add_argument("--output", type=Path, help="tracking tasks: write the joint path and errors per waypoint (.csv)")
-    run.add_argument("--record", type=Path, metavar="FILE.rrd",
-                     help="write a rerun recording of the run (open it with `metaik replay FILE.rrd`)")
-
-    sub.add_parser("tasks", help="list the shipped task files")
-    sub.add_parser("solvers", help="list the solvers with their options, defaults and references")
-    add_bench_command(sub)
-    add_reach_command(sub)
-    add_replay_command(sub)
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
-    console = Console()
-    try:
-        commands = {"robots": _robots, "show": _show, "run": _run, "tasks": _tasks, "solvers": _solvers,
-                    "bench": bench_command, "reach": reach_command, "replay": replay_command}
-        return commands[args.command](args, console)
-    except MetaikError as err:
-        Console(stderr=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False, markup=True,
-                                   soft_wrap=True)
-        return EXIT_INPUT
-    except KeyboardInterrupt:
-        Console(stderr=True).print("interrupted")
-        return EXIT_INTERRUPTED
-
-
-def _robots(args, console: Console) -> int:
-    from .loading import load_robot, robot_index
-
-    table = Table(title="Shipped robots (robots/index.toml)")
-    for column in ("name", "DOF", "end-effectors", "groups"):
-        table.add_column(column, no_wrap=True)
-    table.add_column("description", overflow="fold")
-    for name, entry in robot_index().items():
-        robot = load_robot(name)
-        groups = ", ".join(f"{g} ({len(i)})" for g, i in robot.groups.items())
-        table.add_row(name, str(robot.n), ", ".join(robot.end_effectors), groups, entry.get("description", ""))
-    console.print(table)
-    return EXIT_OK
-
-
-def _solvers(args, console: Console) -> int:
-    from .solvers import IK_SOLVERS, SOLVERS, ik_solver
-
-    table = Table(title="Solvers: solve(problem, name, options={...}); metaik run TASK --solver NAME")
-    for column in ("name", "kind", "options (defaults)", "reference"):
-        table.add_column(column, overflow="fold")
-    for name in [*sorted(IK_SOLVERS), *sorted(SOLVERS)]:
-        solver = ik_solver(name)
-        kind = "local engine" if solver.uses_jacobians else "metaheuristic"
-        defaults = ", ".join(f"{k}={v!r}" for k, v in solver.defaults().items()) or "—"
-        reference = solver.reference or (SOLVERS[name].__doc__ or "").strip().splitlines()[0]
-        table.add_row(name, kind, escape(defaults), escape(reference))
-    console.print(table)
-    return EXIT_OK
-
-
-def _show(args, console: Console) -> int:
-    from .loading import load_robot
-
-    robot = load_robot(args.robot)
-    console.print(f"[bold]{robot.name}[/]: {robot.n} joint coordinates, end-effectors {list(robot.end_effectors)}")
-    table = Table()
-    for column in ("#", "coordinate", "kind", "lower", "upper", "group"):
-        table.add_column(column)
-    group_of = {int(i): g for g, idx in robot.groups.items() for i in idx}
-    for joint in robot.joints:
-        for i in joint.coordinates:
-            table.add_row(
-                str(i), robot.coordinate_names[i], joint.kind.value,
-                f"{robot.lower[i]:.4g}", f"{robot.upper[i]:.4g}", group_of.get(i, ""),
-            )
-    console.print(table)
-    if robot.locked:
-        console.print("locked: " + ", ".join(f"{k}={v:.4g}" for k, v in robot.locked.items()))
-    return EXIT_OK
-
-
-def _tasks(args, console: Console) -> int:
-    from .resources import data_dir
-
-    table = Table(title="Shipped tasks (metaik run NAME)")
-    table.add_column("name", no_wrap=True)
-    table.add_column("first line", overflow="fold")
-    for path in sorted(data_dir("tasks").glob("*.toml")):
-        first = path.read_text().splitlines()[0].lstrip("# ") if path.stat().st_size else ""
-        table.add_row(path.stem, first)
-    console.print(table)
-    return EXIT_OK
-
-
-def _run(args, console: Console) -> int:
-    from .solve import solve
-    from .taskfile import load_task
+def run_command(args, console: Console) -> int:
+    from ..solve import solve
+    from ..taskfile import load_task
 
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
     if isinstance(task, ReachTask):  # M-FABRIK or its Jacobian baselines
@@ -215,7 +96,7 @@ def _run_reach(args, console: Console, task) -> int:
     """``metaik run`` of a reach task (paper 003): random targets or a path, with obstacles and Algorithm 2."""
     from rich.progress import Progress
 
-    from .fabrik.taskfile import run_reach_task
+    from ..fabrik.taskfile import run_reach_task
 
     solver = args.solver or task.solver["name"]
     what = f"{len(task.targets)} set-points of a path" if task.is_path else f"{task.random} random targets"
@@ -298,7 +179,7 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
 def _track_cases(args, task, cases, settings, solver, tolerance, recorder, results: list, csv_row) -> bool:
     """Track each case in turn, appending ``(case, result)`` to ``results`` (and to the recording, if any) and
     each waypoint to the CSV as soon as it is solved; returns True when Ctrl-C stopped the run."""
-    from .tracking import track, waypoint_errors
+    from ..tracking import track, waypoint_errors
 
     for case in cases:
         kinds = case.problem.program.term_kinds  # the same terms at every waypoint of the case
@@ -400,5 +281,3 @@ def _max(a: np.ndarray) -> float:
     return float(a.max()) if a.size else float("nan")
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

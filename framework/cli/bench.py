@@ -6,16 +6,16 @@ from __future__ import annotations
 import shlex
 from pathlib import Path
 
+from ..bench.grid import GRID_LIMIT, GROUP_BY, plan
+from ..bench.report import doc_figures, grid_markdown, report_markdown, write_doc, write_report
+from ..bench.runner import run_grid
+from ..bench.store import drop_runs, grid_records
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, MetaikError, TaskError
 from ..stats import (
     sci,
     summary_rows,
 )
 from ..taskfile import resolve_task
-from .grid import GRID_LIMIT, GROUP_BY, plan
-from .report import doc_figures, grid_markdown, report_markdown, write_doc, write_report
-from .runner import run_grid
-from .store import drop_runs, grid_records
 
 
 # ---------------------------------------------------------------------------------------------- command line
