@@ -47,6 +47,7 @@ from tests.fuzz.bad_inputs import API_CASES, CLI_CASES  # noqa: E402
 from tests.fuzz.escapes import ARM, ESCAPES  # noqa: E402
 from tests.fuzz.test_random_trees import _pinocchio_q, reach_reachable_pose  # noqa: E402
 from tests.fuzz.trees import random_tree  # noqa: E402
+from tests.processes import alive, children  # noqa: E402
 
 OUT = report.ROOT / "docs" / "reliability.md"
 RUN = ["run", "paper000_sinusoidal", "--solver", "cmaes", "--points", "40", "--no-progress"]
@@ -167,29 +168,6 @@ def kill_runs(kills: int, rng: np.random.Generator) -> dict[str, list]:
     return out
 
 
-def _children(pid: int) -> list[int]:
-    found = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[1]) == pid and fields[0] != "Z":
-            found.append(int(stat.parent.name))
-    return found
-
-
-def _alive(pids: list[int]) -> list[int]:
-    alive = []
-    for pid in pids:
-        try:
-            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z":
-                alive.append(pid)
-        except OSError:
-            pass
-    return alive
-
-
 def _results(path: Path) -> dict[tuple, float]:
     runs: dict[tuple, float] = {}
     duplicates = 0
@@ -218,13 +196,13 @@ def kill_benches(kills: int, rng: np.random.Generator) -> dict[str, object]:
             process = subprocess.Popen([*base, "--out", str(out)], env=_env(), stdout=subprocess.DEVNULL,
                                        stderr=subprocess.DEVNULL)
             time.sleep(float(rng.uniform(0.2, 0.8)) * duration)
-            workers = _children(process.pid)
+            workers = children(process.pid)
             process.kill()
             process.wait()
             deadline = time.monotonic() + 20
-            while time.monotonic() < deadline and _alive(workers):
+            while time.monotonic() < deadline and alive(workers):
                 time.sleep(0.1)
-            orphans += len(_alive(workers))
+            orphans += len(alive(workers))
             subprocess.run([*base, "--out", str(out)], env=_env(), check=True, capture_output=True)
             runs, dup = _results(out / "results.jsonl")
             duplicates += dup

@@ -29,6 +29,7 @@ from framework.errors import TaskError
 from framework.resources import data_dir
 from framework.stats import sign_rows, summary_rows
 from tests.conftest import same_framework_env
+from tests.processes import alive, children
 
 SMALL = """
 [task]
@@ -327,7 +328,6 @@ def test_killing_the_bench_ends_its_workers(small, tmp_path):
     import subprocess
     import sys
     import time
-    from pathlib import Path
 
     env = same_framework_env()
     slow = small.read_text().replace("max_iterations = 15", "max_iterations = 3000").replace("runs = 3", "runs = 30")
@@ -336,29 +336,18 @@ def test_killing_the_bench_ends_its_workers(small, tmp_path):
                               str(tmp_path / "out"), "--no-figures"], env=env, stdout=subprocess.DEVNULL,
                              stderr=subprocess.DEVNULL)
 
-    def children() -> list[int]:
-        found = []
-        for stat in Path("/proc").glob("[0-9]*/stat"):
-            try:
-                fields = stat.read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == bench.pid and fields[0] != "Z":
-                found.append(int(stat.parent.name))
-        return found
-
     deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and len(children()) < 2:
+    while time.monotonic() < deadline and len(children(bench.pid)) < 2:
         time.sleep(0.1)
-    workers = children()
+    workers = children(bench.pid)
     assert len(workers) >= 2
     time.sleep(1.0)
     bench.kill()
     bench.wait()
     deadline = time.monotonic() + 20
-    alive = workers
-    while time.monotonic() < deadline and alive:
-        alive = [pid for pid in workers if Path(f"/proc/{pid}").exists()
-                 and Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"]
+    running = workers
+    while time.monotonic() < deadline and running:
+        running = alive(workers)
         time.sleep(0.1)
-    assert not alive, f"workers still running after their bench was killed: {alive}"
+    assert not running, f"workers still running after their bench was killed: {running}"
+
