@@ -351,3 +351,13 @@ def test_killing_the_bench_ends_its_workers(small, tmp_path):
         time.sleep(0.1)
     assert not running, f"workers still running after their bench was killed: {running}"
 
+
+def test_history_points_zero_keeps_every_iteration(small, tmp_path):
+    """``history_points = 0`` is documented as "keep all": the plan accepts it and a run stores its whole history."""
+    small.write_text(small.read_text().replace("[bench]", "[bench]\nhistory_points = 0"))
+    grid = plan([small], solvers=["de"], runs=1, cases=[expand_task(small).cases[0].name])
+    assert {spec.history_points for spec in grid.specs} == {0}
+    results = tmp_path / "r.jsonl"
+    run_grid(grid, results, jobs=1, progress=False)
+    record = read_results(results)[0]
+    assert record.history_at == list(range(1, record.iterations + 1))

@@ -342,7 +342,7 @@ def plan(
             }, sort_keys=True)
             for name in names
         )
-        history = option(None, b.get("history_points", HISTORY_POINTS), "history_points", where)
+        history = option(None, b.get("history_points", HISTORY_POINTS), "history_points", where, minimum=0)
         blocks.append(_TaskRuns(task, names, selected, first, n_runs, budgets, history))
     size = sum(len(block) for block in blocks)
     if size > grid_limit:
