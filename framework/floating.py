@@ -13,7 +13,7 @@ joint can be locked at a full pose: a 7-vector ``(x, y, z, qx, qy, qz, qw)`` (Pi
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -31,8 +31,14 @@ def coordinate_joints(name: str) -> tuple[str, ...]:
     return tuple(f"{name}_{axis}" for axis, _, _ in AXES)
 
 
-def _chain(root: ET.Element, name: str, parent: str, child: str, origin: ET.Element | None,
-           translation: float) -> list[ET.Element]:
+def floating_joints(joint_names: Sequence[str]) -> set[str]:
+    """Of ``joint_names``, the six joints of every floating joint they hold (all six solved)."""
+    names = set(joint_names)
+    prefixes = {n[: -len("_x")] for n in names if n.endswith("_x")}
+    return {j for prefix in prefixes if set(coordinate_joints(prefix)) <= names for j in coordinate_joints(prefix)}
+
+
+def _chain(name: str, parent: str, child: str, origin: ET.Element | None, translation: float) -> list[ET.Element]:
     """Links and joints from ``parent`` to ``child`` replacing a floating joint ``name``."""
     elements, previous = [], parent
     for k, (axis, kind, xyz) in enumerate(AXES):
@@ -65,7 +71,7 @@ def with_floating_joints(root: ET.Element, *, add_root: bool, translation: float
         name = joint.get("name")
         parent, child = joint.find("parent").get("link"), joint.find("child").get("link")
         root.remove(joint)
-        root.extend(_chain(root, name, parent, child, joint.find("origin"), translation))
+        root.extend(_chain(name, parent, child, joint.find("origin"), translation))
         names.append(name)
     if add_root:
         children = {j.find("child").get("link") for j in root.findall("joint")}
@@ -74,7 +80,7 @@ def with_floating_joints(root: ET.Element, *, add_root: bool, translation: float
             raise RobotFileError(f"floating_base=True needs one root link; found {roots}")
         world = f"{ROOT_JOINT}_world"
         root.insert(0, ET.Element("link", name=world))
-        root.extend(_chain(root, ROOT_JOINT, world, roots[0], None, translation))
+        root.extend(_chain(ROOT_JOINT, world, roots[0], None, translation))
         names.append(ROOT_JOINT)
     return root, tuple(names)
 

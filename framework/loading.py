@@ -20,8 +20,8 @@ import pinocchio as pin
 
 from .errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from .resources import data_dir
-from .robot import Robot, build_joints, default_bounds
-from .floating import expand as expand_floating, with_floating_joints
+from .floating import expand as expand_floating, floating_joints, with_floating_joints
+from .robot import JointKind, Robot, build_joints, default_bounds
 from .validate import names, table
 
 if sys.version_info >= (3, 11):
@@ -352,7 +352,7 @@ def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:
         if jid in has_solved_child:
             continue
         chain = [solved[a] for a in ancestors[jid] if a in solved] + [joint]
-        if all(j.kind.value == "continuous" for j in chain):
+        if all(j.kind is JointKind.CONTINUOUS for j in chain):
             continue  # a wheel or a caster: continuous joints all the way from the root
         frames = [f for f in model.frames if f.parentJoint == jid and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
                   and not SENSOR_NAMES.search(f.name)]
@@ -399,7 +399,7 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
         shared = set.intersection(*map(set, chains)) if len(chains) > 1 else set()
         if shared:
             first = [j for j in chains[0] if j in shared]
-            mobile = robot.joint(first[0]).kind.value == "planar" or first[0] in floating_names(robot)
+            mobile = robot.joint(first[0]).kind is JointKind.PLANAR or first[0] in floating_joints(robot.joint_names)
             result["base" if mobile else _link_of(robot, first[0])] = _coords(robot, first)
         for frame, chain in zip(robot.end_effectors, chains):
             own = [j for j in chain if j not in shared]
@@ -414,13 +414,6 @@ def _link_of(robot: Robot, joint: str) -> str:
     jid = robot.model.getJointId(joint)
     return next((f.name for f in robot.model.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY), joint)
 
-
-def floating_names(robot: Robot) -> set[str]:
-    """The six joints of every floating base of ``robot`` (see :mod:`framework.floating`)."""
-    from .floating import AXES
-
-    return {j.name for j in robot.joints if j.name.endswith(f"_{AXES[0][0]}")
-            and all(f"{j.name[:-2]}_{axis}" in robot.joint_names for axis, _, _ in AXES)}
 
 
 def _coords(robot: Robot, joint_names: Sequence[str]) -> np.ndarray:

@@ -17,7 +17,6 @@ KINDS: dict[str, tuple[tuple[type, ...], str]] = {
     "list": ((list, tuple), "a list"),
     "table": ((dict,), "a table"),
     "names": ((list, tuple), "a list of names"),
-    "any": ((object,), "a value"),
 }
 
 

@@ -17,7 +17,7 @@ import pinocchio as pin
 from ..errors import TaskError
 from ..robot import Robot
 from . import blocks as B
-from .base import Term, as_vector
+from .base import Term
 from .program import Block
 
 #: Stand-in for "no upper bound" in a DISTANCE block.
@@ -101,7 +101,7 @@ class SphereObstacles(Term):
         if not (isinstance(margin, (int, float)) and np.isfinite(margin) and margin >= 0):
             raise TaskError(f"obstacle margin must be a distance >= 0 [m]; got {margin!r}")
         self.shape, self.margin = shape, float(margin)
-        self.centers, self.radii = [as_vector(c, 3, "obstacle centre") for c in centers], radii
+        self.centers, self.radii = centers, radii
         self.cover = cover if cover is not None else sphere_cover(shape)
         self.frames = ()
         self.name = name or "obstacles"
