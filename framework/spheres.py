@@ -116,6 +116,8 @@ def fit_spheres(points: np.ndarray, count: int, rng: np.random.Generator, *, ite
     pad = float(cKDTree(points).query(points, k=2)[0][:, 1].max()) if len(points) > 1 else 0.0
     radii = np.array([np.linalg.norm(points[label == j] - centers[j], axis=1).max() if np.any(label == j) else 0.0
                       for j in range(count)]) + pad
+    # a sphere of radius pad (an empty cluster, or a single point) is inside the union of the others: its point's
+    # nearest sample is within pad and lies in a sphere that reaches pad beyond it; all kept if every one is so
     keep = radii > pad if np.any(radii > pad) else np.ones(count, dtype=bool)
     return centers[keep], radii[keep]
 
