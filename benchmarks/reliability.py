@@ -36,7 +36,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
-import pinocchio as pin  # noqa: E402
 import report  # noqa: E402
 
 import framework as fw  # noqa: E402
@@ -45,7 +44,7 @@ from framework.errors import MetaikError, RobotFileError  # noqa: E402
 from framework.recording import read_recording  # noqa: E402
 from tests.fuzz.bad_inputs import API_CASES, CLI_CASES  # noqa: E402
 from tests.fuzz.escapes import ARM, ESCAPES  # noqa: E402
-from tests.fuzz.test_random_trees import _pinocchio_q, reach_reachable_pose  # noqa: E402
+from tests.fuzz.references import fk_difference, jacobian_difference, reach_reachable_pose  # noqa: E402
 from tests.fuzz.trees import random_tree  # noqa: E402
 from tests.processes import alive, children  # noqa: E402
 
@@ -227,25 +226,9 @@ def random_robots(count: int) -> dict[str, object]:
         robot = fw.robot_from_urdf(tree.urdf)
         kinds.update(j.kind.value for j in robot.joints)
         kinds.update("mimic" for _ in robot.mimics)
-        model = pin.buildModelFromXML(tree.urdf)
-        data = model.createData()
         X = robot.random_configurations(np.random.default_rng(seed), 3)
-        poses, J = robot.frame_jacobians(X, tree.leaves)
-        h = 1e-6
-        for b, x in enumerate(X):
-            pin.framesForwardKinematics(model, data, _pinocchio_q(model, robot, x, tree.mimic))
-            for k, frame in enumerate(tree.leaves):
-                oMf = data.oMf[model.getFrameId(frame)]
-                fk_error = max(fk_error, np.abs(poses.positions[b, k] - oMf.translation).max(),
-                               np.abs(poses.rotations[b, k] - oMf.rotation).max())
-            for i in range(robot.n):
-                step = np.zeros(robot.n)
-                step[i] = h
-                P = robot.frame_poses(np.array([x + step, x - step]), tree.leaves)
-                for k in range(len(tree.leaves)):
-                    dp = (P.positions[0, k] - P.positions[1, k]) / (2 * h)
-                    w = pin.log3(P.rotations[0, k] @ P.rotations[1, k].T) / (2 * h)
-                    jac_error = max(jac_error, np.abs(J[b, k, :3, i] - dp).max(), np.abs(J[b, k, 3:, i] - w).max())
+        fk_error = max(fk_error, fk_difference(tree, robot, X, tree.leaves))
+        jac_error = max(jac_error, jacobian_difference(robot, X, tree.leaves))
         ok, position, angle = reach_reachable_pose(seed)
         if ok and position <= 1e-9 and angle <= 1e-9:
             successes += 1
