@@ -55,6 +55,8 @@ class DHJoint:
         kind: ``"revolute"`` (the joint variable adds to theta) or ``"prismatic"`` (it adds to d).
         lower, upper: joint limits of the variable q [rad for revolute, m for prismatic].
         name: optional label of the row (not used in the URDF; joints are named ``{prefix}joint{j}``).
+        radius: radius of the link's collision capsules [m] (``None``: no collision geometry), see
+            :func:`link_collisions`.
     """
 
     a: float
@@ -65,9 +67,12 @@ class DHJoint:
     lower: float = -math.pi
     upper: float = math.pi
     name: str | None = None
+    radius: float | None = None
 
     def __post_init__(self) -> None:
         label = self.name or "DH row"
+        if self.radius is not None and not (math.isfinite(self.radius) and self.radius > 0):
+            raise RobotFileError(f"{label}: collision radius {self.radius} must be a number > 0 [m]")
         if self.kind not in KINDS:
             raise RobotFileError(f"{label}: joint kind {self.kind!r} is not one of {', '.join(KINDS)}")
         for field in ("a", "alpha", "d", "theta"):
@@ -197,6 +202,31 @@ def _joint(name, kind, parent, child, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), 
     return joint
 
 
+def _collision(link: ET.Element, geometry: str, dims: dict[str, str], xyz=(0.0, 0.0, 0.0),
+               rpy=(0.0, 0.0, 0.0)) -> None:
+    collision = ET.SubElement(link, "collision")
+    ET.SubElement(collision, "origin", xyz=_num(*xyz), rpy=_num(*rpy))
+    ET.SubElement(ET.SubElement(collision, "geometry"), geometry, **dims)
+
+
+def link_collisions(link: ET.Element, row: DHJoint) -> None:
+    """Collision geometry of DH row ``row`` on ``link{j}_z`` (the body joint j moves): spheres of ``row.radius``
+    ``r`` every ``r`` (at most) along each of the row's offsets — ``d`` along z (a prismatic row: its shortest
+    stroke, behind the joint), then ``a`` along x — ends included. Their union holds the capsule of radius
+    ``r √3/2`` around the segments (URDF has no capsule element; spheres are also what the fast distance
+    kernel uses, so the exact check and the kernel see the same shape)."""
+    r = row.radius
+    if r is None:
+        return
+    revolute = row.kind == "revolute"
+    dz = row.d if revolute else -max(row.lower, 0.0)
+    z_end = dz if revolute else 0.0
+    points = [(0.0, 0.0, t * dz) for t in np.linspace(0.0, 1.0, int(math.ceil(abs(dz) / r)) + 1)]
+    points += [(t * row.a, 0.0, z_end) for t in np.linspace(0.0, 1.0, int(math.ceil(abs(row.a) / r)) + 1)[1:]]
+    for xyz in points:
+        _collision(link, "sphere", {"radius": _num(r)}, xyz)
+
+
 def chain_elements(
     table: Sequence[DHJoint],
     prefix: str = "",
@@ -226,10 +256,12 @@ def chain_elements(
         revolute = row.kind == "revolute"
         joint_xyz = (0.0, 0.0, 0.0) if revolute else (0.0, 0.0, row.d)
         dh_xyz = (row.a, 0.0, row.d) if revolute else (row.a, 0.0, 0.0)
+        moving = _link(z_link)
+        link_collisions(moving, row)
         elements += [
             _joint(f"{prefix}joint{j}", row.kind, prev, z_link, joint_xyz, (0.0, 0.0, row.theta),
                    axis=(0.0, 0.0, 1.0), limits=(row.lower, row.upper)),
-            _link(z_link),
+            moving,
             _joint(f"{prefix}dh{j}", "fixed", z_link, link, dh_xyz, (row.alpha, 0.0, 0.0)),
             _link(link),
         ]  # fmt: skip
@@ -312,6 +344,7 @@ def _table(name: str, spec: Mapping) -> tuple[DHJoint, ...]:
                     lower=to_q(row["lower"]),
                     upper=to_q(row["upper"]),
                     name=f"{name} joint {j}",
+                    radius=row.get("radius", spec.get("radius")),
                 )
             )
         except (KeyError, TypeError, ValueError) as err:
@@ -350,6 +383,9 @@ def robot_urdf(
             world_link=root or "world", platform_link=b.get("platform", "platform"),
         )  # fmt: skip
         parent = b.get("platform", "platform")
+        if "body" in b:  # the platform's collision box: size [m], centre xyz [m]
+            platform = next(e for e in elements if e.tag == "link" and e.get("name") == parent)
+            _collision(platform, "box", {"size": _num(*b["body"]["size"])}, tuple(b["body"].get("xyz", (0, 0, 0))))
     elif root is not None:
         elements.append(_link(root))
     arms = spec.get("arms", [])
