@@ -10,7 +10,7 @@ from .numba_cache import drop_stale_entries
 drop_stale_entries()  # before any compiled function loads: cached code of edited sources is dropped
 
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (CenterOfMass, SelfCollision, SphereObstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
+from .costs import (CenterOfMass, SelfCollision, Obstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -32,6 +32,7 @@ from .robot import Joint, JointKind, Robot
 from .solve import IKResult, solve
 from .batch import BatchResult, solve_batch
 from .collision import CollisionReport, Contact, RobotShape
+from .scene import Box, Capsule, Mesh, Plane, Scene, Sphere
 from .solvers import solver_names
 
 __version__ = "0.1.0"
@@ -71,8 +72,14 @@ __all__ = [
     "ResourceError",
     "Robot",
     "SelfCollision",
-    "SphereObstacles",
+    "Obstacles",
     "RobotShape",
+    "Scene",
+    "Sphere",
+    "Box",
+    "Capsule",
+    "Plane",
+    "Mesh",
     "RobotFileError",
     "SolverError",
     "TaskError",

@@ -35,7 +35,8 @@ class BatchResult:
 
     Attributes:
         configurations: ``(B, n)`` joint coordinates [rad / m].
-        success: ``(B,)`` every task block of the item within its tolerance.
+        success: ``(B,)`` every task block of the item within its tolerance (and, with collision terms, no contact
+            on the exact geometry).
         errors: ``(B, blocks)`` each task block's error [m or rad], named by ``error_names``.
         costs: ``(B,)`` the weighted objective at each configuration.
         iterations: ``(B,)`` solver iterations.
@@ -135,6 +136,9 @@ def solve_batch(
     angular = np.array(program.task_angular, dtype=bool)
     limits = np.where(angular, template.angle_tolerance, template.tolerance)
     success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
+    if problem.checks_collisions:  # as solve does: no contact on the exact geometry
+        for i in np.flatnonzero(success):
+            success[i] = not problem.collisions(state.X[i]).colliding
     return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,
                        time.perf_counter() - started, method.name)
 

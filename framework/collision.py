@@ -8,6 +8,10 @@ Locked joints' links are part of the shape (a locked torso still collides)::
     shape = RobotShape(robot, srdf="robot.srdf")
     report = shape.check(x)            # CollisionReport: contacts closer than the margin, the smallest distance
     report.colliding, report.contacts  # [Contact("l_forearm", "r_forearm", -0.012), ...]
+    shape.check(x, scene=scene)        # and every geometry that moves against the scene's obstacles
+
+With a scene, the pairs are the robot's own plus every geometry not fixed to the world (joint 0) against every
+obstacle: what is fixed to the world stays where the user placed it, whatever the configuration.
 
 Meshes are found from ``package://`` paths in ``package_dirs`` and in every folder above the robot file (an
 installed ``example-robot-data`` resolves so).
@@ -24,6 +28,13 @@ import pinocchio as pin
 
 from .errors import RobotFileError
 from .robot import Robot
+from .scene import Scene
+from .spheres import SphereCover, sphere_cover
+
+
+#: Penetrations shallower than this [m] are touching, not collisions: coal's GJK / EPA resolve distances between
+#: primitives to about 1e-6 m, so a configuration on a collision term's boundary reads as slightly inside.
+TOUCH = 1e-5
 
 
 @dataclass(frozen=True)
@@ -39,7 +50,7 @@ class Contact:
 @dataclass(frozen=True)
 class CollisionReport:
     """The pairs closer than ``margin`` [m] at a configuration, closest first, and the smallest distance of all
-    pairs checked."""
+    pairs checked (NaN when not measured: a fast check without contacts)."""
 
     contacts: tuple[Contact, ...]
     min_distance: float
@@ -58,9 +69,13 @@ class RobotShape:
         robot: the robot; its URDF's ``<collision>`` elements are read against its Pinocchio model.
         srdf: an SRDF file whose ``<disable_collisions>`` pairs are not checked.
         package_dirs: folders holding ROS packages, for ``package://`` mesh paths.
+        always: configurations sampled (seeded) to find the pairs in contact in every one of them — geometries
+            overlapping by construction (two links meeting at a wrist), which no configuration separates; they are
+            not checked, as MoveIt's setup assistant disables them. 0 keeps them.
     """
 
-    def __init__(self, robot: Robot, *, srdf: str | Path | None = None, package_dirs: Sequence[str | Path] = ()):
+    def __init__(self, robot: Robot, *, srdf: str | Path | None = None, package_dirs: Sequence[str | Path] = (),
+                 always: int = 50):
         self.robot = robot
         folders = [str(p) for p in package_dirs]
         if robot.source:
@@ -86,6 +101,70 @@ class RobotShape:
         self.geometry = geometry
         self._data = model.createData()
         self._geometry_data = geometry.createData()
+        if always > 0:
+            self._remove_always_colliding(always)
+        self._covers: dict[tuple[int, int, int], SphereCover] = {}
+        self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
+
+    def _remove_always_colliding(self, samples: int) -> None:
+        rng = np.random.default_rng(0)
+        always = np.ones(len(self.geometry.collisionPairs), dtype=bool)
+        for x in self.robot.random_configurations(rng, samples):
+            pin.computeCollisions(self.robot.model, self._data, self.geometry, self._geometry_data,
+                                  self.robot.to_pinocchio(x), False)
+            always &= np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
+            if not always.any():
+                return
+        for k in sorted(np.flatnonzero(always), reverse=True):
+            self.geometry.removeCollisionPair(self.geometry.collisionPairs[int(k)])
+        self._geometry_data = self.geometry.createData()
+
+    def cover(self, *, per_geometry: int = 4, samples: int = 1500, seed: int = 0) -> SphereCover:
+        """The sphere cover of every geometry (:func:`framework.spheres.sphere_cover`), computed once per
+        setting."""
+        key = (per_geometry, samples, seed)
+        if key not in self._covers:
+            self._covers[key] = sphere_cover(self, per_geometry=per_geometry, samples=samples, seed=seed)
+        return self._covers[key]
+
+    def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:
+        """Geometry name -> ``(joint, placement in the joint, solid parameters (16,), volume [m³])`` of every box,
+        capsule and cylinder (a cylinder as the capsule holding it): the kernel's signed distance to them is exact
+        (see :func:`framework.costs.blocks.solid_distance`), so they need no sphere cover on one side of a pair."""
+        import coal
+
+        from .scene import BOX, CAPSULE
+
+        out = {}
+        for g in self.geometry.geometryObjects:
+            shape = g.geometry
+            if isinstance(shape, coal.Box):
+                dims, solid = np.asarray(shape.halfSide, dtype=float), BOX
+                volume = float(np.prod(2 * dims))
+            elif isinstance(shape, (coal.Capsule, coal.Cylinder)):
+                dims, solid = np.array([shape.radius, shape.halfLength, 0.0]), CAPSULE
+                volume = float(np.pi * shape.radius ** 2 * (2 * shape.halfLength + 4 / 3 * shape.radius))
+            else:
+                continue
+            out[g.name] = (int(g.parentJoint), g.placement, np.concatenate([[solid], np.eye(3).ravel(), np.zeros(3),
+                                                                              dims]), volume)
+        return out
+
+    def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData]:
+        """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the
+        last scene asked."""
+        if self._scene is not None and self._scene[0] is scene:
+            return self._scene[1], self._scene[2]
+        geometry = self.geometry.copy()
+        geometry.removeAllCollisionPairs()
+        robot_geometries = [i for i, g in enumerate(geometry.geometryObjects) if g.parentJoint != 0]
+        for obstacle in scene:
+            shape, placement = obstacle.coal()
+            k = geometry.addGeometryObject(pin.GeometryObject(f"obstacle:{obstacle.name}", 0, 0, placement, shape))
+            for i in robot_geometries:
+                geometry.addCollisionPair(pin.CollisionPair(i, k))
+        self._scene = (scene, geometry, geometry.createData())
+        return self._scene[1], self._scene[2]
 
     @property
     def pairs(self) -> tuple[tuple[str, str], ...]:
@@ -93,16 +172,46 @@ class RobotShape:
         objects = self.geometry.geometryObjects
         return tuple((objects[p.first].name, objects[p.second].name) for p in self.geometry.collisionPairs)
 
-    def check(self, x: np.ndarray, margin: float = 0.0) -> CollisionReport:
-        """Distances of every pair at joint coordinates ``x`` ``(n,)``; pairs closer than ``margin`` [m] are
-        contacts."""
+    def check(self, x: np.ndarray, margin: float = 0.0, scene: Scene | None = None, *,
+              self_pairs: bool = True, distances: bool = True) -> CollisionReport:
+        """Distances at joint coordinates ``x`` ``(n,)`` of the robot's own pairs (unless ``self_pairs`` is
+        False) and, with ``scene``, of the moving geometries to its obstacles (named ``obstacle:<name>``); pairs
+        closer than ``margin`` [m] are contacts; with margin 0, pairs penetrating by :data:`TOUCH` or more, or at
+        distance exactly 0 (coal's distance between intersecting meshes, which has no depth).
+
+        ``distances=False`` (margin 0 only) is the fast check: coal's collision test on every pair and distances
+        (penetration depths) only for the pairs in contact — about 50x faster on meshes; the report's
+        ``min_distance`` is then the deepest contact's, or NaN (not measured) when there is none.
+        """
+        if not distances and margin != 0.0:
+            raise ValueError("the fast check (distances=False) finds contacts at margin 0 only")
         q = self.robot.to_pinocchio(np.asarray(x, dtype=float))
-        pin.computeDistances(self.robot.model, self._data, self.geometry, self._geometry_data, q)
-        objects = self.geometry.geometryObjects
-        distances = [r.min_distance for r in self._geometry_data.distanceResults]
-        contacts = sorted(
-            (Contact(objects[p.first].name, objects[p.second].name, float(d))
-             for p, d in zip(self.geometry.collisionPairs, distances) if d < margin),
-            key=lambda c: c.distance,
-        )
-        return CollisionReport(tuple(contacts), float(min(distances, default=np.inf)), float(margin))
+        models = [(self.geometry, self._geometry_data)] if self_pairs else []
+        if scene is not None:
+            models.append(self._with_scene(scene))
+        contacts, smallest = [], np.inf
+        for geometry, data in models:
+            objects, pairs = geometry.geometryObjects, geometry.collisionPairs
+            if distances:
+                pin.computeDistances(self.robot.model, self._data, geometry, data, q)
+                found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
+            else:
+                pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
+                found = [(k, float(pin.computeDistance(geometry, data, k).min_distance))
+                         for k, r in enumerate(data.collisionResults) if r.isCollision()]
+            for k, d in found:
+                smallest = min(smallest, d)
+                if (d < margin) if margin > 0 else (d <= -TOUCH or d == 0.0):
+                    contacts.append(Contact(objects[pairs[k].first].name, objects[pairs[k].second].name, d))
+        if not distances and not contacts:
+            smallest = float("nan")
+        return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest), float(margin))
+
+
+def merge_reports(reports: Sequence[CollisionReport]) -> CollisionReport:
+    """One report of several (each pair once, closest first; the smallest distance and margin of them all,
+    NaN distances left out)."""
+    contacts = {(c.a, c.b): c for r in reports for c in r.contacts}
+    measured = [r.min_distance for r in reports if not np.isnan(r.min_distance)]
+    return CollisionReport(tuple(sorted(contacts.values(), key=lambda c: c.distance)),
+                           min(measured) if measured else float("nan"), min((r.margin for r in reports), default=0.0))

@@ -3,7 +3,8 @@
 ``Problem.cost(X)`` is what solvers minimize: one compiled pass over the population computes the forward
 kinematics of every frame the terms read and every term's value (:class:`~framework.costs.Program`), then the
 weighted sum. ``Problem.evaluate(X)`` reports every term separately; ``Problem.errors(x)`` each task term's
-error in its own unit (m or rad), which decides success.
+error in its own unit (m or rad), which decides success, with ``Problem.collisions(x)`` (the exact check of the
+collision terms) when there are any.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .collision import CollisionReport, merge_reports
 from .costs import Objective, Program
 from .errors import TaskError
 from .robot import Robot
@@ -147,10 +149,23 @@ class Problem:
             self.names, self.weights, values, values @ self._weights, values[:, self.task_mask].sum(axis=1)
         )
 
+    @cached_property
+    def checks_collisions(self) -> bool:
+        """Whether a term stands for an exact collision check (then success needs :meth:`collisions` clear)."""
+        return any(t.checks_collisions for _, t in self.objective)
+
+    def collisions(self, x: np.ndarray) -> CollisionReport | None:
+        """The exact collision check of the problem's collision terms at ``x`` ``(n,)``, as one report (coal on
+        the URDF's geometry; ``None`` without collision terms)."""
+        if not self.checks_collisions:
+            return None
+        x = self.robot.check_population(x)[0]
+        return merge_reports([t.collisions(self.robot, x) for _, t in self.objective if t.checks_collisions])
+
     def errors(self, x: np.ndarray) -> dict[str, float]:
         """Each task block's error at one configuration ``x`` ``(n,)``: distance [m] for position-like terms,
         angle [rad] for orientations, by name (a pose contributes ``name.distance`` and ``name.angle``)."""
         from .engine import task_errors
 
         x = self.robot.check_population(x)[0]
-        return dict(zip(self.program.task_blocks, task_errors(self.program, x).tolist()))
+        return self.program.named_errors(task_errors(self.program, x).tolist())

@@ -4,7 +4,8 @@ It validates the request, looks the solver up by name (``"hybrid"`` by default: 
 the warm start, a metaheuristic's global phase when that misses; ``"multistart_lm"``: the engine alone; or any
 registered metaheuristic), runs it and reports an :class:`IKResult`. Success is strict: every task term within
 its tolerance in its own unit — positions and relative positions within ``tolerance`` [m], orientations within
-``angle_tolerance`` [rad] (default: the same number).
+``angle_tolerance`` [rad] (default: the same number) — and, when the problem has collision terms, no contact on the
+exact geometry.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from .collision import CollisionReport
 from .errors import SolverError
 from .problem import Problem
 from .solvers import Request, ik_solver
@@ -41,8 +43,10 @@ class IKResult:
         task_error: sum of the unweighted task terms (position [m] + orientation ``sin(φ/2)`` + ...: the papers'
             measure).
         errors: each task term's error in its own unit, by name: distance [m] for positions and relative
-            positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``).
-        success: every entry of ``errors`` within its tolerance (never after an interruption).
+            positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``; a
+            collision term its deepest sphere overlap [m]).
+        success: every entry of ``errors`` within its tolerance and, with collision terms, no contact in
+            ``collisions`` (never after an interruption).
         stop_reason: why the solver stopped (``tolerance``, ``max_iterations``, ``time_budget``, ``stagnation``,
             ``local_minimum``, ``interrupted``, ...).
         iterations, evaluations: solver iterations and cost / residual evaluations.
@@ -51,6 +55,8 @@ class IKResult:
         solver: solver name; settings: every setting used.
         state: what a following solve of a similar problem may start from, as options of the same solver
             (e.g. CMA-ES's adapted covariance along a trajectory).
+        collisions: the exact collision check at ``configuration`` (coal on the URDF's geometry) when the
+            problem has collision terms, else ``None``.
     """
 
     configuration: np.ndarray
@@ -67,6 +73,7 @@ class IKResult:
     settings: dict[str, Any] = field(default_factory=dict, repr=False)
     state: dict[str, Any] = field(default_factory=dict, repr=False)
     errors: dict[str, float] = field(default_factory=dict)
+    collisions: CollisionReport | None = None
 
 
 def solve(
@@ -192,6 +199,8 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     # an interrupted solve is never a success, whatever its last point (the user stopped it before its end)
     success = outcome.stop_reason != "interrupted" and program.within(error_list, request.tolerance,
                                                                        request.angle_tolerance)
+    collisions = problem.collisions(x)
+    success = success and (collisions is None or not collisions.colliding)
     value_list = values.tolist()
     return IKResult(
         configuration=x,
@@ -207,5 +216,6 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
         solver=solver,
         settings=outcome.settings,
         state=outcome.state,
-        errors=dict(zip(program.task_blocks, error_list)),
+        errors=program.named_errors(error_list),
+        collisions=collisions,
     )

@@ -12,12 +12,15 @@ drawn independently).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
-from .collision import RobotShape
 from .errors import RobotFileError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .collision import RobotShape
 
 
 @dataclass(frozen=True)
@@ -80,16 +83,22 @@ def surface_points(geometry, count: int, rng: np.random.Generator, mesh_path: st
                                                 half * rng.choice([-1.0, 1.0], k)])
         return points
     if mesh_path:
-        import trimesh
-
-        try:
-            mesh = trimesh.load(mesh_path, force="mesh")
-        except Exception as err:  # trimesh raises many types on unreadable files
-            raise RobotFileError(f"cannot read the mesh {mesh_path}: {err}") from None
-        scale = np.ones(3) if mesh_scale is None else np.asarray(mesh_scale, dtype=float)
-        sampled, _ = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
-        return np.vstack([np.asarray(sampled), np.asarray(mesh.vertices)]) * scale
+        return mesh_surface_points(mesh_path, count, rng, mesh_scale)
     raise RobotFileError(f"collision geometry of type {type(geometry).__name__} cannot be covered by spheres")
+
+
+def mesh_surface_points(path: str, count: int, rng: np.random.Generator, scale: np.ndarray | None = None
+                        ) -> np.ndarray:
+    """About ``count`` points on a mesh file's surface and its vertices, scaled by ``scale`` (3,) ``(k, 3)`` [m]."""
+    import trimesh
+
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as err:  # trimesh raises many types on unreadable files
+        raise RobotFileError(f"cannot read the mesh {path}: {err}") from None
+    scale = np.ones(3) if scale is None else np.asarray(scale, dtype=float)
+    sampled, _ = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
+    return np.vstack([np.asarray(sampled), np.asarray(mesh.vertices)]) * scale
 
 
 def fit_spheres(points: np.ndarray, count: int, rng: np.random.Generator, *, iterations: int = 30
@@ -123,13 +132,19 @@ def fit_spheres(points: np.ndarray, count: int, rng: np.random.Generator, *, ite
 
 
 def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, samples: int = 1500, seed: int = 0) -> SphereCover:
-    """Cover every collision geometry of ``shape`` by ``per_geometry`` spheres (see the module docstring)."""
+    """Cover every collision geometry of ``shape`` by ``per_geometry`` spheres (see the module docstring; a
+    sphere by itself)."""
+    import coal
+
     rng = np.random.default_rng(seed)
     joints, centers, radii, names = [], [], [], []
     for g in shape.geometry.geometryObjects:
-        local = surface_points(g.geometry, samples, rng, g.meshPath, g.meshScale)
-        points = local @ g.placement.rotation.T + g.placement.translation  # in the joint frame
-        c, r = fit_spheres(points, per_geometry, rng)
+        if isinstance(g.geometry, coal.Sphere):  # a sphere covers itself
+            c, r = g.placement.translation[None].copy(), np.array([float(g.geometry.radius)])
+        else:
+            local = surface_points(g.geometry, samples, rng, g.meshPath, g.meshScale)
+            points = local @ g.placement.rotation.T + g.placement.translation  # in the joint frame
+            c, r = fit_spheres(points, per_geometry, rng)
         joints += [g.parentJoint] * len(r)
         centers.append(c)
         radii.append(r)

@@ -17,9 +17,8 @@ A task file reads top to bottom like the experiment it describes::
 
     [[terms]]
     type = "position"                     # position | orientation | direction | cone | look_at | center_of_mass |
-                                          # joint_target |
-                                          # distance | motion | relative_position | relative_pose |
-                                          # joint_limits
+                                          # joint_target | distance | motion | relative_position |
+                                          # relative_pose | joint_limits | self_collision | obstacles
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -27,6 +26,16 @@ A task file reads top to bottom like the experiment it describes::
     [[cases]]                             # one IK solve per case; its keys are variables of the expressions
     name = "target 1"
     t_e1 = [0.5, -0.2, 0.45]
+
+**Collisions.** ``self_collision`` and ``obstacles`` terms (optional ``margin`` [m]) keep the robot's links apart
+and clear of the ``[[obstacles]]`` entries (``type = "box" | "sphere" | "capsule" | "plane" | "mesh"``, keys in
+:data:`framework.scene.TABLES`); ``[task] srdf`` names an SRDF whose disabled pairs are not checked::
+
+    [[obstacles]]
+    type = "box"                          # a table
+    name = "table"
+    center = [0.6, 0.0, 0.35]
+    size = [0.8, 1.2, 0.05]
 
 Expressions are numbers, vectors (lists), the names of a case's variables, ``pi``, ``+ - * /``,
 parentheses and the rotation matrices ``Rx(a)``, ``Ry(a)``, ``Rz(a)``; nothing else is evaluated. Angles are in radians, lengths in metres.
@@ -71,13 +80,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Position,
-                    RelativePose, RelativePosition)
+from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective,
+                    Obstacles, Orientation, Position, RelativePose, RelativePosition, SelfCollision)
+from .collision import RobotShape
 from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
 from .resources import data_dir
+from .rotations import rotation_from
 from .robot import Robot
+from .scene import Scene
 from .trajectory import Trajectory, circle, lemniscate, line, paper000, point_count, rose, sinusoid
 from .validate import check_table
 
@@ -109,8 +121,8 @@ _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
 #: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
 TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
              "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
-             "bounds": "table", "package_dirs": "names", "floating_base": "bool"}
-TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench"}
+             "bounds": "table", "package_dirs": "names", "floating_base": "bool", "srdf": "text"}
+TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench", "obstacles"}
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
                "seed": "integer", "bounds": "text", "options": "table", "stop_at_tolerance": "bool",
@@ -141,6 +153,8 @@ TERM_KEYS = {
     "joint_target": {"group", "target"},
     "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
     "joint_limits": set(),
+    "self_collision": {"margin"},
+    "obstacles": {"margin"},
 }
 
 
@@ -300,13 +314,14 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
     priorities = task.get("priorities", True)
     if not isinstance(priorities, bool):
         raise TaskError(f"[task] priorities must be true or false; got {priorities!r}")
+    world = _World(robot, path, task.get("srdf"), _tables(raw, "obstacles"))
     for i, case in enumerate(cases_raw):
         variables = {k: v for k, v in case.items() if k not in ("name", "trajectory")}
         name = str(case.get("name", f"case {i + 1}"))
         previous = _previous(robot, raw.get("previous", {}), variables, path)
         spec = case.get("trajectory", raw.get("trajectory"))
         if spec is None:
-            objective = _objective(robot, terms, variables, previous)
+            objective = _objective(robot, terms, variables, previous, world)
             cases.append(Case(name, Problem(robot, objective, bounds=bounds, priorities=priorities), variables))
             continue
         reserved = sorted(set(variables) & set(WAYPOINT_VARIABLES))
@@ -314,7 +329,7 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
             raise TaskError(f"case {name!r}: {reserved} are waypoint variables of a tracking task; rename them")
         trajectory = _trajectory(spec, variables, path, points, f"case {name!r}: trajectory")
         _check_uses_waypoint(terms)
-        builder = _TermsAtWaypoint(robot, terms, variables)
+        builder = _TermsAtWaypoint(robot, terms, variables, world)
         first = builder(0, trajectory.positions[0], trajectory.rotation(0), previous)
         cases.append(Case(name, Problem(robot, first, bounds=bounds, priorities=priorities), variables, trajectory,
                           builder, previous))
@@ -364,7 +379,23 @@ def _previous(robot: Robot, table: Mapping[str, Any], variables: Mapping, path: 
     return previous
 
 
-def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray) -> Objective:
+class _World:
+    """The robot's collision shape (built when a collision term first asks, once per task file) and the
+    ``[[obstacles]]`` scene."""
+
+    def __init__(self, robot: Robot, path: Path, srdf: str | None, obstacles: list[dict]):
+        self.robot, self.srdf = robot, None if srdf is None else path.parent / srdf
+        self.scene = Scene.from_tables(obstacles, "[[obstacles]]", path.parent)
+        self._shape: RobotShape | None = None
+
+    @property
+    def shape(self) -> RobotShape:
+        if self._shape is None:
+            self._shape = RobotShape(self.robot, srdf=self.srdf)
+        return self._shape
+
+
+def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray, world: _World) -> Objective:
     objective = None
     for i, spec in enumerate(terms):
         where = f"[[terms]] #{i + 1}"
@@ -406,6 +437,14 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
                 bounds = {k: float(value(k)) for k in ("at_least", "at_most", "exactly") if k in spec}
                 term = Distance(spec["frame"], spec["to_frame"] if "to_frame" in spec else value("to_point"),
                                 name=name, **bounds)
+            elif kind == "self_collision":
+                term = SelfCollision(world.shape, margin=float(value("margin")) if "margin" in spec else 0.0,
+                                     name=name)
+            elif kind == "obstacles":
+                if not len(world.scene):
+                    raise TaskError(f"{where} (obstacles): the task file has no [[obstacles]] entries")
+                term = Obstacles(world.shape, world.scene, margin=float(value("margin")) if "margin" in spec
+                                 else 0.0, name=name)
             elif kind == "motion":
                 prev = value("previous") if "previous" in spec else previous
                 term = Motion(spec["group"], prev, norm=spec.get("norm", "l2"), name=name)
@@ -422,15 +461,15 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
 class _TermsAtWaypoint:
     """The task file's terms at one waypoint: a :data:`framework.tracking.TaskBuilder`."""
 
-    def __init__(self, robot: Robot, terms: list, variables: Mapping[str, Any]):
-        self.robot, self.terms, self.variables = robot, terms, dict(variables)
+    def __init__(self, robot: Robot, terms: list, variables: Mapping[str, Any], world: _World):
+        self.robot, self.terms, self.variables, self.world = robot, terms, dict(variables), world
         self.__name__ = "task file terms"
 
     def __call__(self, k: int, position: np.ndarray, rotation: np.ndarray | None, previous: np.ndarray) -> Objective:
         point = {**self.variables, "t": position, "k": float(k)}
         if rotation is not None:
             point["R"] = rotation
-        return _objective(self.robot, self.terms, point, previous)
+        return _objective(self.robot, self.terms, point, previous, self.world)
 
 
 def _check_uses_waypoint(terms: list) -> None:
@@ -510,6 +549,4 @@ def _trajectory(spec: Any, variables: Mapping, path: Path, points: int | None, w
 
 
 def _rotation_value(value: Any, where: str) -> np.ndarray:
-    from .costs.orientation import rotation_from
-
     return rotation_from(value, where)

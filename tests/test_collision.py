@@ -66,5 +66,37 @@ def test_panda_srdf_pairs_are_not_checked(erd):
 
 
 def test_no_collision_geometry_is_our_error():
+    bare = re.sub(r"<collision>.*?</collision>", "", SPHERES, flags=re.S)
     with pytest.raises(RobotFileError, match="no <collision>"):
-        RobotShape(fw.load_robot("youbot_arm"))
+        RobotShape(fw.robot_from_urdf(bare))
+
+
+@pytest.mark.parametrize("name", ["youbot_dual_mobile", "baxter_dual", "puma_scara", "stanford_dual"])
+def test_dh_robots_have_spheres_along_their_links(name):
+    """The generated URDFs' collision spheres cover each DH link's path — from the joint along z by d, then
+    along x by a, to the next DH frame (Pinocchio's frame placement) — at most one radius apart, so every point of
+    the path is within r/2 of a sphere centre (the union holds a capsule of radius r√3/2 around it)."""
+    import pinocchio as pin
+
+    robot = fw.load_robot(name)
+    shape = RobotShape(robot)
+    model, data = robot.model, robot.model.createData()
+    gdata = shape.geometry.createData()
+    pin.forwardKinematics(model, data, robot.to_pinocchio(robot.middle))
+    pin.updateGeometryPlacements(model, data, shape.geometry, gdata)
+    spheres = [(m.translation, o.geometry.radius) for m, o in zip(gdata.oMg, shape.geometry.geometryObjects)
+               if o.geometry.__class__.__name__ == "Sphere"]
+    centres, radii = np.array([c for c, _ in spheres]), np.array([r for _, r in spheres])
+    checked = 0
+    for frame in model.frames:
+        joint = frame.parentJoint
+        if not re.fullmatch(r".*link\d+", frame.name) or not model.names[joint].split("_")[-1].startswith("joint"):
+            continue
+        a, _, d = frame.placement.translation
+        path = [(0, 0, t * d) for t in np.linspace(0, 1, 20)] + [(t * a, 0, d) for t in np.linspace(0, 1, 20)]
+        for p in path:
+            world = data.oMi[joint].act(np.array(p, dtype=float))
+            gaps = np.linalg.norm(centres - world, axis=1)
+            assert np.min(gaps - radii / 2) <= 1e-9, (frame.name, p)
+        checked += 1
+    assert checked >= 8

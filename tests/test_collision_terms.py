@@ -59,12 +59,12 @@ def test_panda_reaches_targets_without_self_collision(erd):
 def test_sphere_obstacles_are_kept_clear(arm):
     robot, shape, exact = arm
     obstacle = np.array([0.0, L, 0.0])  # on the forearm sphere's circle, at θ1 + θ2 = π/2
-    problem = fw.Problem(robot, fw.SphereObstacles(shape, [obstacle], [0.05], margin=0.01, cover=exact)
+    problem = fw.Problem(robot, fw.Obstacles(shape, [fw.Sphere(obstacle, 0.05)], margin=0.01, cover=exact)
                          + fw.Motion("all", [np.pi / 4, np.pi / 4]))
     result = fw.solve(problem, "de", seed=0, max_iterations=300, tolerance=1e-6, options={"ranking": "feasibility"})
     world = exact.world_centers(shape, result.configuration)[1]
     assert result.success and np.linalg.norm(world - obstacle) >= R + 0.05 + 0.01 - 1e-6
-    with pytest.raises(TaskError, match="centers"):
-        fw.SphereObstacles(shape, [[0, 0]], [0.1])
+    with pytest.raises(TaskError, match="no obstacle"):
+        fw.Obstacles(shape, [])
     with pytest.raises(TaskError, match="margin"):
         fw.SelfCollision(shape, margin=-1.0, cover=exact)

@@ -41,7 +41,7 @@ def test_primitives_are_covered():
     shape = RobotShape(fw.robot_from_urdf(PRIMITIVES))
     cover = sphere_cover(shape, per_geometry=4, samples=1500)
     assert len(cover.radii) <= 4 * shape.geometry.ngeoms
-    assert _uncovered(shape, cover, seed=99) <= 0.0
+    assert _uncovered(shape, cover, seed=99) <= 1e-12  # a sphere covers itself: its surface points at r, to rounding
 
 
 @pytest.mark.parametrize("path", ["panda_description/urdf/panda.urdf", "pr2_description/urdf/pr2.urdf"])

@@ -1,13 +1,14 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
 from .base import LEVELS, Objective, Term, check_weight
-from .collision import SelfCollision, SphereObstacles
+from .collision import Obstacles, SelfCollision
 from .com import CenterOfMass
 from .direction import Cone, Direction, LookAt
 from .distance import Distance
 from .limits import JointLimitPenalty
 from .motion import JointTarget, Motion
-from .orientation import Orientation, rotation_from
+from ..rotations import rotation_from
+from .orientation import Orientation
 from .pose import Pose, pose_from
 from .position import Position
 from .program import Block, Program
@@ -29,7 +30,7 @@ __all__ = [
     "Pose",
     "Position",
     "SelfCollision",
-    "SphereObstacles",
+    "Obstacles",
     "Program",
     "RelativePose",
     "RelativePosition",

@@ -31,6 +31,7 @@ from ..kinematics import FramePoses
 from ..robot import Robot
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..collision import CollisionReport
     from .program import Block
 
 LEVELS = ("task", "regularizer", "value")
@@ -52,6 +53,8 @@ class Term:
     version: int = 0
     #: Whether :meth:`set_target` moves a target (tracking and batches move it).
     has_target: bool = False
+    #: Whether :meth:`collisions` checks something (collision terms).
+    checks_collisions: bool = False
 
     @property
     def is_task(self) -> bool:
@@ -107,6 +110,11 @@ class Term:
                 raise TaskError(f"target {k}: {err}") from None
             rows.append(np.concatenate([b.params for b in probe.blocks(robot) or ()]))
         return np.array(rows, dtype=float).reshape(len(rows), -1)
+
+    def collisions(self, robot: Robot, x: np.ndarray) -> CollisionReport | None:
+        """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; the
+        collision terms answer with coal on the exact geometry, and a solve is a success only without contacts)."""
+        return None
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""

@@ -20,6 +20,7 @@ kind            residual                                      Jacobian          
 ``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
 ``LOOK_AT``     ``R_a e − u``, ``u = (t − p_a)/‖t − p_a‖`` (3)  ``ω × R_a e + (I − uuᵀ)J_p,a/‖t − p_a‖``  ``e, t`` (6)
 ``COM``         ``Σ_k m_k p_k − t`` on chosen axes [m]           ``Σ_k m_k J_p,k``           ``t``, axes mask, ``m_k``
+``CLEARANCE``   ``min(0, sd(p_a) − lo)`` (1) [m]                ``∇sdᵀ ∂p_a`` when below     shape, ``R, c``, dims, lo
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -34,6 +35,10 @@ residual's norm is ``2 sin(θ/2)`` of the angle θ between the axis and the line
 false minimum at θ = π); zero when the frame origin is at ``t``; its second order is left out. ``COM``: the centre
 of mass, a mass-weighted mean of the joints' mass points (frames at their bodies' centres of mass; their slots
 are the block's ``idx`` entries, ``m_k`` the mass fractions), on the axes of a 0/1 mask (rows: the mask's sum).
+``CLEARANCE``: the signed distance ``sd`` of frame ``a``'s origin to a solid (:data:`SOLID_SPHERE`,
+``SOLID_BOX``, ``SOLID_CAPSULE``, ``SOLID_HALFSPACE``; placed by a rotation ``R`` and centre ``c`` in the world,
+or in frame ``b`` when the block has one: a link's box; see :func:`solid_distance`) held at least ``lo`` (a
+sphere's radius plus a margin): one row, a hinge, zero when clear; its second order is left out.
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -46,7 +51,11 @@ import numpy as np
 
 # Block kinds
 (POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
- LOOK_AT, COM) = range(12)
+ LOOK_AT, COM, CLEARANCE) = range(13)
+# Solids of a CLEARANCE block (its first parameter)
+SOLID_SPHERE, SOLID_BOX, SOLID_CAPSULE, SOLID_HALFSPACE = range(4)
+#: Parameters of a CLEARANCE block: solid, R (9, row-major), c (3), dims (3), lo.
+CLEARANCE_PARAMS = 17
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -59,6 +68,12 @@ KIND, RHO, TOL, LEVEL, ROWS, FA, FB, PPTR, IPTR, TERM, COUNT = range(11)
 WEIGHT, SCALE = 0, 1
 
 TWO_PI = 2.0 * np.pi
+
+
+@numba.njit(cache=True, inline="always")
+def is_hinge(kind) -> bool:
+    """Whether a block kind is one-sided: zero residual and Jacobian inside its allowed set (an inequality)."""
+    return kind == DISTANCE or kind == CONE or kind == CLEARANCE
 
 
 @numba.njit(cache=True, inline="always")
@@ -191,7 +206,7 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
     elif kind == RELATIVE_ROTATION:
         relative_rotation_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, L3, E9)
     elif kind == DISTANCE:
-        u, dist = distance_direction(out, fa, fb, params, p)
+        u0, u1, u2, dist = distance_direction(out, fa, fb, params, p)
         lo, hi = params[p + 3], params[p + 4]
         r[row] = dist - hi if dist > hi else (dist - lo if dist < lo else 0.0)
         if want_jacobian:
@@ -199,9 +214,12 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
             for i in range(n):
                 g = 0.0
                 if active:
-                    for c in range(3):
-                        g += u[c] * (Jf[fa, c, i] - (Jf[fb, c, i] if fb >= 0 else 0.0))
+                    g = u0 * Jf[fa, 0, i] + u1 * Jf[fa, 1, i] + u2 * Jf[fa, 2, i]
+                    if fb >= 0:
+                        g -= u0 * Jf[fb, 0, i] + u1 * Jf[fb, 1, i] + u2 * Jf[fb, 2, i]
                 Jr[row, i] = g
+    elif kind == CLEARANCE:
+        clearance_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, E9)
     elif kind == COORDINATES:
         q = bint[b, IPTR]
         for c in range(rows):
@@ -225,16 +243,98 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
 
 
 @numba.njit(cache=True)
+def clearance_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
+    """The ``CLEARANCE`` residual ``min(0, sd − lo)`` of frame ``a``'s origin against a solid fixed in the world
+    (``fb < 0``) or on frame ``b`` (its placement given in ``b``), and its Jacobian ``∇sdᵀ ∂p_rel``: for a solid
+    on ``b``, the point moves relative to it by ``J_p,a − J_p,b − ω_b × (p_a − p_b)``. ``g (3,)`` scratch."""
+    x, y, z = out[fa, 9], out[fa, 10], out[fa, 11]
+    if fb >= 0:  # the point in frame b: R_bᵀ (p_a − p_b)
+        v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
+        x = out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2
+        y = out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2
+        z = out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2
+    sd = solid_distance(x, y, z, params, p, g)
+    below = sd < params[p + 16]
+    r[row] = sd - params[p + 16] if below else 0.0
+    if not want_jacobian:
+        return
+    if not below:
+        for i in range(n):
+            Jr[row, i] = 0.0
+        return
+    g0, g1, g2 = g[0], g[1], g[2]
+    if fb < 0:
+        for i in range(n):
+            Jr[row, i] = g0 * Jf[fa, 0, i] + g1 * Jf[fa, 1, i] + g2 * Jf[fa, 2, i]
+        return
+    w0 = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2  # the gradient in the world: R_b g
+    w1 = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
+    w2 = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
+    d0, d1, d2 = out[fa, 9] - out[fb, 9], out[fa, 10] - out[fb, 10], out[fa, 11] - out[fb, 11]
+    c0, c1, c2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0  # d × w: w·(ω × d) = ω·(d × w)
+    for i in range(n):
+        Jr[row, i] = (w0 * (Jf[fa, 0, i] - Jf[fb, 0, i]) + w1 * (Jf[fa, 1, i] - Jf[fb, 1, i])
+                      + w2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
+                      - (c0 * Jf[fb, 3, i] + c1 * Jf[fb, 4, i] + c2 * Jf[fb, 5, i]))
+
+
+@numba.njit(cache=True)
+def solid_distance(x, y, z, params, p, g) -> float:
+    """Signed distance [m] of the world point ``(x, y, z)`` to the solid of the CLEARANCE parameters at
+    ``params[p:]`` (negative inside), and its gradient into ``g[:3]`` (world frame).
+
+    The point in the solid's frame is ``q = Rᵀ(point − c)``; dims are: a sphere's radius; a box's half sides;
+    a capsule's radius and half length along its z axis; nothing for a half-space (the solid is ``q_z <= 0``).
+    Inside a box the gradient is the nearest face's normal.
+    """
+    solid = int(params[p])
+    v0, v1, v2 = x - params[p + 10], y - params[p + 11], z - params[p + 12]
+    q0 = params[p + 1] * v0 + params[p + 4] * v1 + params[p + 7] * v2  # Rᵀ v
+    q1 = params[p + 2] * v0 + params[p + 5] * v1 + params[p + 8] * v2
+    q2 = params[p + 3] * v0 + params[p + 6] * v1 + params[p + 9] * v2
+    d0, d1, d2 = params[p + 13], params[p + 14], params[p + 15]
+    l0, l1, l2 = 0.0, 0.0, 0.0  # the gradient in the solid's frame
+    if solid == SOLID_HALFSPACE:
+        sd, l2 = q2, 1.0
+    elif solid == SOLID_BOX:
+        a0, a1, a2 = abs(q0) - d0, abs(q1) - d1, abs(q2) - d2
+        o0, o1, o2 = max(a0, 0.0), max(a1, 0.0), max(a2, 0.0)
+        outside = np.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
+        s0, s1, s2 = (1.0 if q0 >= 0.0 else -1.0), (1.0 if q1 >= 0.0 else -1.0), (1.0 if q2 >= 0.0 else -1.0)
+        if outside > 0.0:
+            sd = outside
+            l0, l1, l2 = s0 * o0 / outside, s1 * o1 / outside, s2 * o2 / outside
+        elif a0 >= a1 and a0 >= a2:
+            sd, l0 = a0, s0
+        elif a1 >= a2:
+            sd, l1 = a1, s1
+        else:
+            sd, l2 = a2, s2
+    else:  # a sphere (the capsule's segment of half length 0) or a capsule
+        if solid == SOLID_CAPSULE:
+            q2 -= min(d1, max(-d1, q2))
+        norm = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+        sd = norm - d0
+        if norm > 0.0:
+            l0, l1, l2 = q0 / norm, q1 / norm, q2 / norm
+        else:
+            l2 = 1.0
+    for c in range(3):  # g = R l
+        g[c] = params[p + 1 + 3 * c] * l0 + params[p + 2 + 3 * c] * l1 + params[p + 3 + 3 * c] * l2
+    return sd
+
+
+@numba.njit(cache=True, inline="always")
 def distance_direction(out, fa, fb, params, p):
-    """``(u, ‖v‖)`` of a ``DISTANCE`` block: ``v = p_a − p_b`` (or ``p_a −`` its point when ``fb < 0``), ``u = v/‖v‖``
-    (zero when ``v = 0``)."""
-    u = np.empty(3)
-    for c in range(3):
-        u[c] = out[fa, 9 + c] - (out[fb, 9 + c] if fb >= 0 else params[p + c])
-    dist = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-    for c in range(3):
-        u[c] = u[c] / dist if dist > 0.0 else 0.0
-    return u, dist
+    """``(u₀, u₁, u₂, ‖v‖)`` of a ``DISTANCE`` block: ``v = p_a − p_b`` (or ``p_a −`` its point when ``fb < 0``),
+    ``u = v/‖v‖`` (zero when ``v = 0``); scalars, so the population loop allocates nothing."""
+    v0 = out[fa, 9] - (out[fb, 9] if fb >= 0 else params[p])
+    v1 = out[fa, 10] - (out[fb, 10] if fb >= 0 else params[p + 1])
+    v2 = out[fa, 11] - (out[fb, 11] if fb >= 0 else params[p + 2])
+    dist = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if dist > 0.0:
+        return v0 / dist, v1 / dist, v2 / dist, dist
+    return 0.0, 0.0, 0.0, dist
 
 
 @numba.njit(cache=True)
@@ -467,7 +567,7 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
     """
     kind = bint[b, KIND]
     if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION \
-            or kind == LOOK_AT:
+            or kind == LOOK_AT or kind == CLEARANCE:
         return
     if kind == COM:  # Σ_k m_k μ·∂²p_k, exact
         p, q, count = bint[b, PPTR], bint[b, IPTR], bint[b, COUNT]
@@ -520,9 +620,10 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
         return
     if kind == DISTANCE:  # r = ‖v‖ − bound when outside the band: μ[Dᵀ(I − uuᵀ)D/‖v‖ + Σ u_c ∇²v_c], D = ∂v
         p, fa, fb = bint[b, PPTR], bint[b, FA], bint[b, FB]
-        u, dist = distance_direction(out, fa, fb, params, p)
+        u0, u1, u2, dist = distance_direction(out, fa, fb, params, p)
         if dist <= 0.0 or r[row] == 0.0:
             return
+        u = np.array((u0, u1, u2))
         _position_curvature(fa, mu[0] * u[0], mu[0] * u[1], mu[0] * u[2], Jf, chain_ptr, chain_idx, H)
         if fb >= 0:
             _position_curvature(fb, -mu[0] * u[0], -mu[0] * u[1], -mu[0] * u[2], Jf, chain_ptr, chain_idx, H)

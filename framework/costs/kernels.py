@@ -80,9 +80,11 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     with ``want_jacobian``, the frame Jacobians); 2 keeps the poses and computes the frame Jacobians from them
     (after a call with ``kinematics=1, want_jacobian=False`` at the same ``x``: a step that was accepted).
     """
-    jint, jgeo, fslot, fgeo = kin
+    jint, jgeo, fslot, fgeo = borrow_kin(kin)
+    prog = borrow_prog(prog)
     bint, params, idx, wrap = prog[0], prog[2], prog[3], prog[4]
-    out, W, Jf, r, Jr, L3, E9 = ws
+    out, W, Jf, r, Jr, L3, E9 = borrow_ws(ws)
+    x = borrow(x)
     if kinematics == 1:
         _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
     if want_jacobian and kinematics >= 1:

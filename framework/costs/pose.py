@@ -9,7 +9,7 @@ from ..errors import TaskError
 from ..robot import Robot
 from . import blocks as B
 from .base import Term, as_vector, finite_rows
-from .orientation import rotation_from
+from ..rotations import rotation_from
 from .program import Block
 
 

@@ -182,6 +182,14 @@ class Program:
         self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
         self._versions = [t.version for t in self.terms]
 
+    def named_errors(self, errors: Sequence[float]) -> dict[str, float]:
+        """Task block errors (block order) by name; blocks sharing a name (a collision term's hundreds of sphere
+        pairs) report their worst."""
+        named: dict[str, float] = {}
+        for name, e in zip(self.task_blocks, errors):
+            named[name] = max(e, named.get(name, e))
+        return named
+
     def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float) -> bool:
         """Whether every task block's error (block order, from :func:`framework.engine.task_errors`) is within
         ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others."""

@@ -117,18 +117,34 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
 
 @numba.njit(cache=True)
 def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
-    """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)``; ``A, L (n, n)``, ``g (n,)`` scratch."""
+    """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)``; ``A, L (n, n)``, ``g (n,)`` scratch.
+
+    Summed row by row, skipping rows whose residual and first Jacobian entries are zero — hinge rows that are
+    clear (a collision term has hundreds, almost all clear) — so the cost follows the rows that count."""
     m, n = Jr.shape
     for i in range(n):
+        g[i] = 0.0
         for j in range(i + 1):
-            s = 0.0
-            for p in range(m):
-                s += Jr[p, i] * Jr[p, j]
-            A[i, j] = s
-            A[j, i] = s
+            A[i, j] = 0.0
+    for p in range(m):
+        rp = r[p]
+        if rp == 0.0:
+            zero = True
+            for i in range(n):
+                if Jr[p, i] != 0.0:
+                    zero = False
+                    break
+            if zero:
+                continue
+        for i in range(n):
+            ji = Jr[p, i]
+            if ji == 0.0:
+                continue
+            g[i] -= ji * rp
+            for j in range(i + 1):
+                A[i, j] += ji * Jr[p, j]
+    for i in range(n):
         A[i, i] += damping
-        s = 0.0
-        for p in range(m):
-            s -= Jr[p, i] * r[p]
-        g[i] = s
+        for j in range(i):
+            A[j, i] = A[i, j]
     return cholesky_solve(A, g, L, dx)

@@ -17,8 +17,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import (HALFSIN, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, block_curvature, rho_derivatives,
-                            rho_value)
+from ..costs.blocks import (HALFSIN, KIND, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, block_curvature, is_hinge,
+                            rho_derivatives, rho_value)
 from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_AND_REGULARIZERS, YES,
                              level_value, linearize, task_errors, term_values, workspace)
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
@@ -32,6 +32,9 @@ MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
 TRUST_START, TRUST_MAX = 0.1, 1.0
 #: Gauss-Newton steps back onto the task after a Newton step; halvings of a step before it is damped.
 RESTORE_STEPS, LINE_SEARCH = 4, 4
+#: Damping of those steps: enough for a Cholesky factor of a rank-deficient ``JᵀJ`` (clear hinge rows have no
+#: Jacobian), far below the curvature of any row that moves.
+RESTORE_DAMPING = 1e-14
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
 
@@ -100,7 +103,7 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps
     for _ in range(steps):
         if e <= target:
             break
-        if not bounded_step(x, ws[4][:m], ws[3][:m], 1e-24, lower, upper, box_wrap, Jc, A, L, y, dx):
+        if not bounded_step(x, ws[4][:m], ws[3][:m], RESTORE_DAMPING, lower, upper, box_wrap, Jc, A, L, y, dx):
             break
         for i in range(n):
             x[i] += dx[i]
@@ -124,6 +127,44 @@ def _max_rows(prog) -> int:
 
 
 @numba.njit(cache=True)
+def _hinge_rows(prog, m):
+    """``(m,)`` True for the task rows of one-sided blocks (distances, cones, clearances: zero when clear)."""
+    bint = prog[0]
+    hinge = np.zeros(m, dtype=np.bool_)
+    row = 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != 1:
+            continue
+        for a in range(bint[b, ROWS]):
+            hinge[row + a] = is_hinge(bint[b, KIND])
+        row += bint[b, ROWS]
+    return hinge
+
+
+@numba.njit(cache=True)
+def _active_rows(A, r, lam, hinge, arow, Aa, release) -> int:
+    """The task rows held as equalities in the next Newton step, into ``arow`` (and their Jacobian rows into
+    ``Aa``); returns their count. A row with no Jacobian (a hinge that is clear) constrains nothing; with
+    ``release``, a hinge row whose multiplier pulls to its free side is let go (``λ`` and the violated side's sign
+    ``r`` agree: moving off the boundary lowers the objective)."""
+    m, n = A.shape
+    ma = 0
+    for a in range(m):
+        moving = False
+        for i in range(n):
+            if A[a, i] != 0.0:
+                moving = True
+                break
+        if not moving or (release and hinge[a] and lam[a] * r[a] > 0.0):
+            continue
+        arow[ma] = a
+        for i in range(n):
+            Aa[ma, i] = A[a, i]
+        ma += 1
+    return ma
+
+
+@numba.njit(cache=True)
 def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
                errors, values, stats) -> int:
     """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
@@ -136,7 +177,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     n = x.shape[0]
     m, q = _rows_of(prog, TASK), _rows_of(prog, REGULARIZERS)
     stats[0], stats[1], stats[2] = 0, 0, 0
-    if q == 0 or m >= n:
+    hinge = _hinge_rows(prog, m)
+    equalities = 0
+    for a in range(m):
+        equalities += 0 if hinge[a] else 1
+    if q == 0 or equalities >= n:
         return NOT_APPLICABLE
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
@@ -147,7 +192,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
            np.empty((m, m)), np.empty((m, m)), np.empty(max(m, n)), np.empty(n), np.zeros(m), np.zeros(m),
            np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + m, n + m)), np.empty((n + m, n + m + 1)),
            np.empty(n + m), np.empty(n + m), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
-           np.empty(big), np.empty((n, n)), np.empty((m, n)))
+           np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(m, dtype=np.int64), np.empty((m, n)),
+           np.zeros(m))
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
     tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
@@ -157,6 +203,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     K, M, rhs, sol, xt, dx = borrow(own[14]), borrow(own[15]), borrow(own[16]), borrow(own[17]), \
         borrow(own[18]), borrow(own[19])
     gr, Hr, mu_r, Hlb, Jc = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23]), borrow(own[24])
+    arow, Aa, lam_a = borrow(own[25]), borrow(own[26]), borrow(own[27])
     linearize(x, TASK, kin, prog, cur, YES, COMPUTE)
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     evaluations = 1
@@ -164,7 +211,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     G = level_value(REGULARIZERS, prog, cur_r[3], YES)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                           0.0)
-    _multipliers(cur[4][:m], g, Am, Lm, ym, lam)  # of the start: least squares A Aᵀ λ = A ∇G
+    ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
+    _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
     mu, trust, last_step = MU_START, TRUST_START, 0.0
     status, iterations, accepted = ITERATIONS, 0, 0
@@ -178,46 +226,54 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                                   2.0 * last_step)
             fresh = True
+        ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, True)
+        for a in range(m):  # released and clear rows carry no multiplier
+            lam_neg[a] = lam[a]
+            lam[a] = 0.0
+        for a in range(ma):
+            lam[arow[a]] = lam_neg[arow[a]]
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
             s = g[i]
-            for a in range(m):
-                s -= cur[4][a, i] * lam[a]
+            for a in range(ma):
+                s -= Aa[a, i] * lam[arow[a]]
             gl[i] = s
         nf = 0
         for i in range(n):  # the coordinates descent along −gl does not push through a bound
             if not held(x[i], lower[i], upper[i], box_wrap[i], -gl[i]):
                 fidx[nf] = i
                 nf += 1
-        if nf <= m:
+        if nf <= ma:
             status = CONVERGED
             break
         row = ROW0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
-        k = nf + m
+        k = nf + ma
         Kv, Mv, rv, sv = K[:k, :k], M[:k, : k + 1], rhs[:k], sol[:k]
         Hlb[:, :] = H
         for b in range(bint.shape[0]):
             if bint[b, LEVEL] != 1:
                 continue
             rows = bint[b, ROWS]
+            held_rows = False
             for a in range(rows):
                 lam_neg[row + a] = -lam[row + a]
-            block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], prog[3], chain_ptr, chain_idx, cur[3], row,
-                            Hlb)
+                held_rows = held_rows or lam[row + a] != 0.0
+            if held_rows:  # a clear or released row has no multiplier and adds no curvature
+                block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], prog[3], chain_ptr, chain_idx, cur[3],
+                                row, Hlb)
             row += rows
-        A = cur[4]
         for a in range(nf):
             i = fidx[a]
             for c in range(nf):
                 Kv[a, c] = Hlb[i, fidx[c]]
             Kv[a, a] += mu
-            for c in range(m):
-                Kv[a, nf + c] = A[c, i]
-                Kv[nf + c, a] = A[c, i]
+            for c in range(ma):
+                Kv[a, nf + c] = Aa[c, i]
+                Kv[nf + c, a] = Aa[c, i]
             rv[a] = -g[i]
-        for a in range(m):
-            for c in range(m):
+        for a in range(ma):
+            for c in range(ma):
                 Kv[nf + a, nf + c] = 0.0
-            rv[nf + a] = -cur[3][a]
+            rv[nf + a] = -cur[3][arow[a]]
         if not lu_solve(Kv, rv, Mv, sv):
             mu *= 10.0
             if mu > MU_MAX:
@@ -264,7 +320,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             x[:] = xt
             G = Gt
             for a in range(m):
-                lam[a] = -sv[nf + a]
+                lam[a] = 0.0
+            for a in range(ma):
+                lam[arow[a]] = -sv[nf + a]
             accepted += 1
             fresh = False
             last_step = alpha * step
@@ -286,12 +344,25 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                           0.0)
-    _multipliers(cur[4][:m], g, Am, Lm, ym, multipliers)
+    ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
+    _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, multipliers)
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
     keep_alive(own_cur, own_tri, own)
     return status
+
+
+@numba.njit(cache=True)
+def _scatter_multipliers(Aa, g, Am, Lm, y, lam_a, arow, ma, lam):
+    """:func:`_multipliers` of the active rows ``Aa (ma, n)``, written to their rows ``arow`` of ``lam (m,)``
+    (zeros elsewhere)."""
+    lam[:] = 0.0
+    if ma == 0:
+        return
+    _multipliers(Aa, g, Am[:ma, :ma], Lm[:ma, :ma], y, lam_a[:ma])
+    for a in range(ma):
+        lam[arow[a]] = lam_a[a]
 
 
 @numba.njit(cache=True)

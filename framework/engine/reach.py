@@ -44,10 +44,12 @@ def project(x, lower, upper, box_wrap):
 @numba.njit(cache=True)
 def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     """The Levenberg-Marquardt step ``dx = −(JᵀJ + λI)⁻¹Jᵀr = −Jᵀ(JJᵀ + λI)⁻¹r``, in the smaller of the two
-    systems (``A, L`` are ``(k, k)`` with ``k = min(m, n)``, ``y (k,)``)."""
-    if Jr.shape[0] < Jr.shape[1]:
-        return least_norm_step(Jr, r, damping, A, L, y, dx)
-    return levenberg_marquardt_step(Jr, r, damping, A, L, y, dx)
+    systems (``A, L`` are at least ``(k, k)`` with ``k = min(m, n)``, ``y (k,)``; their leading block is used)."""
+    m, n = Jr.shape
+    k = min(m, n)
+    if m < n:
+        return least_norm_step(Jr, r, damping, A[:k, :k], L[:k, :k], y[:k], dx)
+    return levenberg_marquardt_step(Jr, r, damping, A[:k, :k], L[:k, :k], y[:k], dx)
 
 
 @numba.njit(cache=True)

@@ -1,0 +1,243 @@
+"""Obstacles: the compiled signed distances against coal, their gradients and the Obstacles term's Jacobian against
+finite differences, solves against a brute-force grid, the exact check deciding success, and task-file tables."""
+
+from __future__ import annotations
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.costs import Program
+from framework.costs.blocks import solid_distance
+from framework.engine import residuals
+from framework.errors import TaskError
+from framework.spheres import SphereCover
+from framework.taskfile import load_task
+from tests.test_collision import L, R, SPHERES
+
+TURNED = pin.rpy.rpyToMatrix(0.3, -0.5, 1.1)
+SOLIDS = [
+    fw.Sphere([0.2, -0.1, 0.3], 0.15),
+    fw.Box([0.1, 0.2, -0.1], [0.4, 0.2, 0.3], TURNED),
+    fw.Capsule([-0.2, 0.1, 0.2], 0.1, 0.5, TURNED),
+    fw.Plane([0.0, 0.0, 0.1], [0.2, -0.3, 1.0]),
+]
+
+
+def _sd(obstacle, point) -> tuple[float, np.ndarray]:
+    g = np.empty(3)
+    return solid_distance(*point, obstacle.solids()[0], 0, g), g
+
+
+def _coal_distance(obstacle, point) -> float:
+    """coal's distance from a point (a sphere of radius 1e-6) to the obstacle's exact geometry; a half-space is
+    coal's own Halfspace here, not the box the exact check uses."""
+    if isinstance(obstacle, fw.Plane):
+        shape, placement = coal.Halfspace(obstacle.normal, float(obstacle.normal @ obstacle.point)), pin.SE3.Identity()
+    else:
+        shape, placement = obstacle.coal()
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    probe = coal.Sphere(1e-6)
+    coal.distance(probe, coal.Transform3s(np.eye(3), np.asarray(point, float)), shape,
+                  coal.Transform3s(placement.rotation, placement.translation), request, result)
+    return result.min_distance + 1e-6
+
+
+@pytest.mark.parametrize("obstacle", SOLIDS, ids=lambda o: o.name)
+def test_signed_distances_equal_coal_outside_and_the_depth_inside(obstacle, rng):
+    """Outside: coal's exact distance. Inside: minus the depth, brute-forced as the distance to the nearest of
+    many surface samples (so a kernel returning 0 inside, or the outside formula, fails)."""
+    from framework.spheres import surface_points
+
+    points = rng.uniform(-0.8, 0.8, size=(300, 3))
+    outside = inside = 0
+    for p in points:
+        sd, _ = _sd(obstacle, p)
+        if sd > 1e-3:
+            assert sd == pytest.approx(_coal_distance(obstacle, p), abs=1e-6)
+            outside += 1
+        elif sd < -1e-3 and not isinstance(obstacle, fw.Plane):
+            shape, placement = obstacle.coal()
+            surface = surface_points(shape, 40000, np.random.default_rng(1)) @ placement.rotation.T \
+                + placement.translation
+            depth = np.min(np.linalg.norm(surface - p, axis=1))
+            assert -sd == pytest.approx(depth, abs=4e-3)
+            inside += 1
+    assert outside > 20
+    assert inside > 0 or isinstance(obstacle, fw.Plane)
+
+
+@pytest.mark.parametrize("obstacle", SOLIDS, ids=lambda o: o.name)
+def test_signed_distance_gradients_match_differences(obstacle, rng):
+    h = 1e-7
+    for p in rng.uniform(-0.8, 0.8, size=(40, 3)):
+        sd, g = _sd(obstacle, p)
+        fd = np.array([(_sd(obstacle, p + e)[0] - _sd(obstacle, p - e)[0]) / (2 * h) for e in np.eye(3) * h])
+        if np.linalg.norm(fd) > 0.5:  # away from the box's medial planes (a kink) the gradient is a unit vector
+            np.testing.assert_allclose(g, fd, atol=1e-5)
+        assert np.linalg.norm(g) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_obstacles_jacobian_matches_differences_on_the_mobile_dual_youbot(rng):
+    robot = fw.load_robot("youbot_dual_mobile")
+    shape = fw.RobotShape(robot)
+    scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.4, 0.8, 0.05]), fw.Capsule([0.0, 0.4, 0.4], 0.05, 0.6, TURNED),
+                      fw.Plane([0, 0, 0.02], [0, 0, 1])))
+    program = Program(robot, 1.0 * fw.Obstacles(shape, scene, margin=0.05))
+    h = 1e-7
+    active = 0
+    for x in robot.random_configurations(rng, 6):
+        r, J = residuals(program, x)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        rows = np.abs(r) > 1e-5  # away from the hinge's corner
+        np.testing.assert_allclose(J[rows], fd[rows], atol=1e-5)
+        active += rows.sum()
+    assert active > 10
+
+
+@pytest.fixture(scope="module")
+def arm():
+    robot = fw.robot_from_urdf(SPHERES)
+    shape = fw.RobotShape(robot)
+    exact = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([R, R]), ("base_0", "fore_0"))
+    return robot, shape, exact
+
+
+def test_box_obstacle_solve_matches_a_brute_force_grid(arm):
+    """Motion towards (π/4, π/4) with a box in the way of the forearm sphere: the feasible optimum found by
+    the default solver equals the best point of a 601 x 601 grid that keeps the sphere clear (by the box's
+    closed-form distance), to the grid's resolution; the unconstrained optimum is infeasible."""
+    robot, shape, exact = arm
+    box = fw.Box([0.0, 0.45, 0.0], [0.3, 0.2, 0.3])
+    margin = 0.01
+    goal = np.array([np.pi / 4, np.pi / 4])
+    problem = fw.Problem(robot, fw.Obstacles(shape, [box], margin=margin, cover=exact) + fw.Motion("all", goal))
+
+    def clearance(t1, t2):  # the forearm sphere's centre is at L (cos, sin)(t1 + t2): both joints at the origin
+        c = np.stack([L * np.cos(t1 + t2), L * np.sin(t1 + t2), 0 * t1], axis=-1)
+        q = np.abs(c - box.center) - box.size / 2
+        return np.linalg.norm(np.maximum(q, 0), axis=-1) + np.minimum(q.max(axis=-1), 0)
+
+    grid = np.linspace(-3, 3, 601)
+    t1, t2 = np.meshgrid(grid, grid, indexing="ij")
+    motion = np.hypot(t1 - goal[0], t2 - goal[1])
+    feasible = clearance(t1, t2) >= R + margin
+    assert not clearance(*goal) >= R + margin
+    best = np.unravel_index(np.argmin(np.where(feasible, motion, np.inf)), motion.shape)
+    result = fw.solve(problem, seed=0, tolerance=1e-7)
+    assert result.success and result.collisions is not None and not result.collisions.colliding
+    assert clearance(*result.configuration) >= R + margin - 1e-6
+    assert np.hypot(*(result.configuration - goal)) <= motion[best] + 1e-9
+    assert np.hypot(*(result.configuration - goal)) >= motion[best] - 0.015  # the grid's step is 0.01
+
+
+def test_success_needs_the_exact_check_clear(arm):
+    """A cover of tiny spheres keeps its centres apart but not the real links: the sphere term is met, coal
+    finds the contact, and the solve is not a success."""
+    robot, shape, _ = arm
+    tiny = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([1e-3, 1e-3]),
+                       ("base_0", "fore_0"))
+    problem = fw.Problem(robot, fw.SelfCollision(shape, cover=tiny) + fw.Motion("all", [0.05, 0.0]))
+    result = fw.solve(problem, seed=0, tolerance=1e-7, initial=np.array([0.05, 0.0]))
+    assert result.errors and all(e <= 1e-7 for e in result.errors.values())
+    assert result.collisions.colliding and not result.success
+    assert {frozenset((c.a, c.b)) for c in result.collisions.contacts} == {frozenset(("base_0", "fore_0"))}
+    batch = fw.solve_batch(fw.Problem(robot, fw.SelfCollision(shape, cover=tiny) + fw.Position("fore", [0.1, 0, 0])),
+                           [[L * np.cos(0.05), L * np.sin(0.05), 0.0]] * 2, seed=0)
+    assert not batch.success.any()
+
+
+def test_scene_tables_and_their_errors(tmp_path):
+    scene = fw.Scene.from_tables([
+        {"type": "box", "center": [0.5, 0, 0.3], "size": [0.8, 1.2, 0.05], "rpy": [0, 0, 0.3], "name": "table"},
+        {"type": "sphere", "center": [0, 0, 1], "radius": 0.1},
+        {"type": "capsule", "center": [0, 0, 1], "radius": 0.1, "length": 0.4, "quat_wxyz": [1, 0, 0, 0]},
+        {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 2]},
+    ])
+    assert [o.name for o in scene] == ["table", "sphere", "capsule", "plane"]
+    np.testing.assert_allclose(scene.obstacles[0].rotation, pin.rpy.rpyToMatrix(0, 0, 0.3))
+    np.testing.assert_allclose(scene.obstacles[3].normal, [0, 0, 1])
+    assert scene.solids().shape == (4, 16)
+    bad = [
+        ({"type": "cube"}, "type must be one of"),
+        ({"type": "box", "center": [0, 0, 0]}, "needs size"),
+        ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "colour": "red"}, "unknown keys"),
+        ({"type": "box", "center": [0, 0, 0], "size": [1, -1, 1]}, "edge lengths > 0"),
+        ({"type": "box", "center": [0, 0], "size": [1, 1, 1]}, "center must be 3"),
+        ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "rpy": [0, 0, 0], "quat_xyzw": [0, 0, 0, 1]},
+         "give one of"),
+        ({"type": "sphere", "center": [0, 0, 0], "radius": 0}, "radius must be"),
+        ({"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}, "normal must not be zero"),
+        ({"type": "mesh", "path": "missing.stl"}, "does not exist"),
+    ]
+    for table, message in bad:
+        with pytest.raises(TaskError, match=message):
+            fw.Scene.from_tables([table])
+    with pytest.raises(TaskError, match="must be a Sphere"):
+        fw.Scene(("box",))
+    same = fw.Scene((fw.Sphere([0, 0, 0], 1), fw.Sphere([1, 0, 0], 1)))
+    assert [o.name for o in same] == ["sphere1", "sphere2"]
+
+
+def test_mesh_obstacle_is_covered_and_checked_exactly(tmp_path, arm):
+    """A mesh obstacle (a box written as STL): its sphere cover holds its surface, and the exact check finds the
+    forearm sphere inside it."""
+    import trimesh
+
+    from framework.spheres import surface_points
+
+    path = tmp_path / "block.stl"
+    trimesh.creation.box(extents=[0.2, 0.2, 0.2]).export(path)
+    mesh = fw.Mesh(path, center=[0.12, L, 0.0], spheres=8)  # a face through the forearm sphere at (0, L) at π/4, π/4
+    centers, radii = mesh.cover()
+    surface = surface_points(coal.Box(0.2, 0.2, 0.2), 5000, np.random.default_rng(3)) + [0.12, L, 0.0]
+    inside = np.min(np.linalg.norm(surface[:, None] - centers[None], axis=2) - radii[None], axis=1)
+    assert inside.max() <= 0 and len(radii) <= 8
+    robot, shape, _ = arm
+    assert shape.check([np.pi / 4, np.pi / 4], scene=fw.Scene((mesh,)), self_pairs=False).colliding
+    assert not shape.check([-np.pi / 4, -np.pi / 4], scene=fw.Scene((mesh,)), self_pairs=False).colliding
+
+
+def test_obstacles_in_a_task_file(tmp_path, arm):
+    """[[obstacles]] and the collision terms from a task file: the same answer as the same problem in code."""
+    robot, shape, _ = arm
+    urdf = tmp_path / "spheres.urdf"
+    urdf.write_text(SPHERES)
+    (tmp_path / "task.toml").write_text(f"""
+[task]
+robot = "spheres.urdf"
+[[obstacles]]
+type = "box"
+name = "block"
+center = [0.0, 0.45, 0.0]
+size = [0.3, 0.2, 0.3]
+[[terms]]
+type = "obstacles"
+margin = 0.01
+[[terms]]
+type = "self_collision"
+[[terms]]
+type = "motion"
+group = "all"
+previous = [{np.pi / 4}, {np.pi / 4}]
+""")
+    task = load_task(tmp_path / "task.toml")
+    problem = task.cases[0].problem
+    result = fw.solve(problem, seed=0, tolerance=1e-7)
+    assert result.success and not result.collisions.colliding
+    world = problem.objective.terms[0][1].cover.world_centers(problem.objective.terms[0][1].shape,
+                                                               result.configuration)
+    for c, r in zip(world, problem.objective.terms[0][1].cover.radii):
+        g = np.empty(3)
+        assert solid_distance(*c, fw.Box([0.0, 0.45, 0.0], [0.3, 0.2, 0.3]).solids()[0], 0, g) >= r + 0.01 - 1e-6
+    (tmp_path / "bad.toml").write_text("""
+[task]
+robot = "spheres.urdf"
+[[terms]]
+type = "obstacles"
+""")
+    with pytest.raises(TaskError, match="no \\[\\[obstacles\\]\\] entries"):
+        load_task(tmp_path / "bad.toml")
