@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -103,7 +104,7 @@ class RobotShape:
         self._geometry_data = geometry.createData()
         if always > 0:
             self._remove_always_colliding(always)
-        self._covers: dict[tuple[int, int, int], SphereCover] = {}
+        self._covers: dict[tuple, Any] = {}  # sphere covers and close pairs, by their settings
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
     def _remove_always_colliding(self, samples: int) -> None:
@@ -119,12 +120,34 @@ class RobotShape:
             self.geometry.removeCollisionPair(self.geometry.collisionPairs[int(k)])
         self._geometry_data = self.geometry.createData()
 
-    def cover(self, *, per_geometry: int = 4, samples: int = 1500, seed: int = 0) -> SphereCover:
+    def cover(self, *, per_geometry: int = 4, max_radius: float | None = None, samples: int = 1500,
+              seed: int = 0) -> SphereCover:
         """The sphere cover of every geometry (:func:`framework.spheres.sphere_cover`), computed once per
         setting."""
-        key = (per_geometry, samples, seed)
+        key = (per_geometry, max_radius, samples, seed)
         if key not in self._covers:
-            self._covers[key] = sphere_cover(self, per_geometry=per_geometry, samples=samples, seed=seed)
+            self._covers[key] = sphere_cover(self, per_geometry=per_geometry, max_radius=max_radius,
+                                             samples=samples, seed=seed)
+        return self._covers[key]
+
+    def close_pairs(self, *, samples: int = 1000, within: float = 0.02) -> frozenset[tuple[str, str]]:
+        """The checked pairs that come within ``within`` [m] of each other in at least one of ``samples`` uniform
+        random configurations (seeded), by coal on the exact geometry — the pairs a collision term needs. The
+        others (two shoulders always apart, say) are left out of the sphere terms, where their fat covers could
+        overlap although the links never meet: MoveIt's "never in collision" rule; unlike MoveIt, the exact check
+        still tests them, so a pair the samples missed can only turn a success into a failure, never the
+        reverse."""
+        key = ("close", samples, within)
+        if key not in self._covers:
+            geometry, data = self.geometry, self.geometry.createData()
+            for request in data.collisionRequests:
+                request.security_margin = within
+            close = np.zeros(len(geometry.collisionPairs), dtype=bool)
+            for x in self.robot.random_configurations(np.random.default_rng(1), samples):
+                pin.computeCollisions(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x), False)
+                close |= np.array([r.isCollision() for r in data.collisionResults], dtype=bool)
+            names = self.pairs
+            self._covers[key] = frozenset(names[k] for k in np.flatnonzero(close))
         return self._covers[key]
 
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:

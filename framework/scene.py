@@ -1,7 +1,7 @@
 """Obstacles in the robot's world: spheres, boxes, capsules, half-spaces (a floor, a wall) and meshes.
 
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
-for the compiled signed-distance kernel (``CLEARANCE`` blocks, :func:`framework.costs.blocks.solid_distance`),
+for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.blocks.solid_distance`),
 the exact check builds coal geometry from it (:meth:`framework.collision.RobotShape.check` with ``scene=``),
 recordings draw it, and task files give it as ``[[obstacles]]`` tables::
 
@@ -58,6 +58,10 @@ def _rotation(value: Any, what: str) -> np.ndarray:
     return np.eye(3) if value is None else rotation_target(value, None, None, what)
 
 
+def _xyzw(rr, rotation: np.ndarray):
+    return rr.Quaternion(xyzw=pin.Quaternion(np.asarray(rotation)).coeffs())
+
+
 def _solid_row(solid: int, rotation: np.ndarray, center: np.ndarray, dims: Sequence[float]) -> np.ndarray:
     """One solid's kernel parameters ``(16,)``: code, R (row-major), c, dims (the ``lo`` column is the term's)."""
     return np.concatenate([[float(solid)], rotation.ravel(), center, np.asarray(dims, dtype=float)])
@@ -78,6 +82,11 @@ class Sphere:
     def solids(self) -> np.ndarray:
         """Kernel parameters ``(1, 16)``."""
         return _solid_row(SPHERE, np.eye(3), self.center, (self.radius, 0.0, 0.0))[None]
+
+    def rerun(self, rr, color) -> list[tuple[str, Any]]:
+        """``(sub-entity, rerun archetype)`` pairs that draw it."""
+        return [("", rr.Ellipsoids3D(centers=[self.center], half_sizes=[[self.radius] * 3], colors=[color],
+                                     fill_mode="solid"))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """The exact geometry and its placement in the world."""
@@ -106,6 +115,10 @@ class Box:
     def solids(self) -> np.ndarray:
         return _solid_row(BOX, self.rotation, self.center, self.size / 2)[None]
 
+    def rerun(self, rr, color) -> list[tuple[str, Any]]:
+        return [("", rr.Boxes3D(centers=[self.center], half_sizes=[self.size / 2], quaternions=[_xyzw(rr, self.rotation)],
+                                colors=[color], fill_mode="solid"))]
+
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
 
@@ -131,6 +144,11 @@ class Capsule:
 
     def solids(self) -> np.ndarray:
         return _solid_row(CAPSULE, self.rotation, self.center, (self.radius, self.length / 2, 0.0))[None]
+
+    def rerun(self, rr, color) -> list[tuple[str, Any]]:
+        end = self.center - self.rotation[:, 2] * self.length / 2  # rerun places a capsule by one end
+        return [("", rr.Capsules3D(lengths=[self.length], radii=[self.radius], translations=[end],
+                                   quaternions=[_xyzw(rr, self.rotation)], colors=[color], fill_mode="solid"))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
@@ -161,6 +179,12 @@ class Plane:
 
     def solids(self) -> np.ndarray:
         return _solid_row(HALFSPACE, self.rotation, self.point, (0.0, 0.0, 0.0))[None]
+
+    def rerun(self, rr, color) -> list[tuple[str, Any]]:
+        """A 2 m square slab 1 mm thick whose top face is the plane, around its point."""
+        R = self.rotation
+        return [("", rr.Boxes3D(centers=[self.point - R[:, 2] * 5e-4], half_sizes=[[1.0, 1.0, 5e-4]],
+                                quaternions=[_xyzw(rr, R)], colors=[color], fill_mode="solid"))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """A wide, deep box whose top face is the plane (coal's half-spaces have no distance to meshes)."""
@@ -205,6 +229,15 @@ class Mesh:
     def solids(self) -> np.ndarray:
         centers, radii = self.cover()
         return np.array([_solid_row(SPHERE, np.eye(3), c, (r, 0.0, 0.0)) for c, r in zip(centers, radii)])
+
+    def rerun(self, rr, color) -> list[tuple[str, Any]]:
+        import trimesh
+
+        mesh = trimesh.load(str(self.path), force="mesh")
+        mesh.apply_scale(self.scale)
+        return [("", rr.Transform3D(translation=self.center, mat3x3=self.rotation)),
+                ("/mesh", rr.Mesh3D(vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
+                                    albedo_factor=color))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal

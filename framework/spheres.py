@@ -23,6 +23,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from .collision import RobotShape
 
 
+#: The most spheres :func:`sphere_cover` puts on one geometry.
+MAX_PER_GEOMETRY = 64
+
+
 @dataclass(frozen=True)
 class SphereCover:
     """Spheres moving with the robot's joints.
@@ -131,9 +135,12 @@ def fit_spheres(points: np.ndarray, count: int, rng: np.random.Generator, *, ite
     return centers[keep], radii[keep]
 
 
-def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, samples: int = 1500, seed: int = 0) -> SphereCover:
-    """Cover every collision geometry of ``shape`` by ``per_geometry`` spheres (see the module docstring; a
-    sphere by itself)."""
+def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, max_radius: float | None = None, samples: int = 1500,
+                 seed: int = 0) -> SphereCover:
+    """Cover every collision geometry of ``shape`` by spheres (see the module docstring; a sphere by itself):
+    ``per_geometry`` spheres, doubled (up to 64) while the largest is over ``max_radius`` [m] (a sphere geometry
+    is its own cover whatever its size) — a large link
+    covered by a few spheres would be much fatter than it is and could keep collision-free configurations out."""
     import coal
 
     rng = np.random.default_rng(seed)
@@ -144,7 +151,11 @@ def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, samples: int = 150
         else:
             local = surface_points(g.geometry, samples, rng, g.meshPath, g.meshScale)
             points = local @ g.placement.rotation.T + g.placement.translation  # in the joint frame
-            c, r = fit_spheres(points, per_geometry, rng)
+            count = per_geometry
+            c, r = fit_spheres(points, count, rng)
+            while max_radius is not None and r.max() > max_radius and count < MAX_PER_GEOMETRY:
+                count *= 2
+                c, r = fit_spheres(points, count, rng)
         joints += [g.parentJoint] * len(r)
         centers.append(c)
         radii.append(r)

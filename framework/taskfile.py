@@ -237,6 +237,7 @@ class TaskFile:
     cases: tuple[Case, ...]
     raw: dict[str, Any] = field(repr=False, default_factory=dict)
     priorities: bool = True
+    scene: Scene = field(default_factory=Scene)
 
     @property
     def is_tracking(self) -> bool:
@@ -334,7 +335,7 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
         cases.append(Case(name, Problem(robot, first, bounds=bounds, priorities=priorities), variables, trajectory,
                           builder, previous))
     return TaskFile(path, task.get("name", path.stem), task.get("description", ""), robot, solver, tuple(cases), raw,
-                    priorities)
+                    priorities, world.scene)
 
 
 def _table(raw: Mapping, key: str, path: Path, *, required: bool = True) -> dict:

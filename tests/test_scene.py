@@ -98,6 +98,30 @@ def test_obstacles_jacobian_matches_differences_on_the_mobile_dual_youbot(rng):
     assert active > 10
 
 
+def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(rng):
+    """SPHERES rows (sphere pairs of two bodies) and SOLIDS rows on a frame (arm spheres against the platform's
+    box) against central differences (rows away from the hinge's corner; the closest pair switching within ±h
+    would show here, and does not on these samples)."""
+    robot = fw.load_robot("youbot_dual_mobile")
+    shape = fw.RobotShape(robot)
+    term = fw.SelfCollision(shape, margin=0.05)
+    kinds = {b.kind for b in term.blocks(robot)}
+    from framework.costs import blocks as B
+
+    assert kinds == {B.SPHERES, B.SOLIDS}
+    program = Program(robot, 1.0 * term)
+    h = 1e-7
+    active = 0
+    for x in robot.random_configurations(rng, 8):
+        r, J = residuals(program, x)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        rows = np.abs(r) > 1e-5
+        np.testing.assert_allclose(J[rows], fd[rows], atol=1e-5)
+        active += rows.sum()
+    assert active > 10
+
+
 @pytest.fixture(scope="module")
 def arm():
     robot = fw.robot_from_urdf(SPHERES)
@@ -241,3 +265,32 @@ type = "obstacles"
 """)
     with pytest.raises(TaskError, match="no \\[\\[obstacles\\]\\] entries"):
         load_task(tmp_path / "bad.toml")
+
+
+def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, arm):
+    """Every obstacle kind is a static entity of the recording, at its place; the sphere cover is drawn at the
+    solution with its radii."""
+    import trimesh
+
+    from framework.recording import Recorder, read_recording
+
+    robot, shape, exact = arm
+    path = tmp_path / "block.stl"
+    trimesh.creation.box(extents=[0.1, 0.1, 0.1]).export(path)
+    scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.4, 0.2, 0.1], name="table"), fw.Sphere([0, 0, 1], 0.1),
+                      fw.Capsule([0, 1, 0], 0.05, 0.4), fw.Plane([0, 0, -0.1], [0, 0, 1]),
+                      fw.Mesh(path, center=[1, 1, 0])))
+    x = np.array([0.3, -0.2])
+    with Recorder(tmp_path / "scene.rrd", robot) as recorder:
+        recorder.log_scene(scene)
+        recorder.log_spheres(exact, shape, x)
+    rec = read_recording(tmp_path / "scene.rrd")
+    _, centres = rec.values("/world/obstacles/table", "Boxes3D:centers")
+    np.testing.assert_allclose(np.array(centres[0]).ravel(), [0.5, 0.0, 0.3], atol=1e-6)
+    _, halves = rec.values("/world/obstacles/table", "Boxes3D:half_sizes")
+    np.testing.assert_allclose(np.array(halves[0]).ravel(), [0.2, 0.1, 0.05], atol=1e-6)
+    for entity, component in (("sphere", "Ellipsoids3D:half_sizes"), ("capsule", "Capsules3D:radii"),
+                              ("plane", "Boxes3D:half_sizes"), ("mesh/mesh", "Mesh3D:vertex_positions")):
+        assert rec.values(f"/world/obstacles/{entity}", component)[1], entity
+    _, points = rec.values("/world/spheres", "Points3D:positions", "solution")
+    np.testing.assert_allclose(np.array(points[0]), exact.world_centers(shape, x), atol=1e-6)

@@ -67,3 +67,17 @@ def test_a_single_sphere_fits_a_sphere_and_world_centres_follow_the_joints():
         M = robot.frame_placement(x, frame) if joint > 0 else None
         expected = center if M is None else M.rotation @ center + M.translation
         np.testing.assert_allclose(world[k], expected, atol=1e-12)
+
+
+def test_a_radius_bound_doubles_the_spheres_until_it_holds():
+    """max_radius: spheres are added (doubling, up to 64) until none is larger; the cover still holds the
+    surface. A 4-sphere cover of these primitives has spheres over 6 cm (shown), the bounded one none."""
+    shape = RobotShape(fw.robot_from_urdf(PRIMITIVES))
+    loose = sphere_cover(shape, per_geometry=4)
+    tight = sphere_cover(shape, per_geometry=4, max_radius=0.06)
+    assert loose.radii.max() > 0.06
+    counts = {g: tight.geometries.count(g) for g in set(tight.geometries) if g != "b_1"}  # b_1: a sphere, itself
+    for g, count in counts.items():
+        radii = tight.radii[[k for k, name in enumerate(tight.geometries) if name == g]]
+        assert radii.max() <= 0.06 or count >= 64
+    assert _uncovered(shape, tight, seed=5) <= 1e-12

@@ -20,7 +20,8 @@ kind            residual                                      Jacobian          
 ``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
 ``LOOK_AT``     ``R_a e − u``, ``u = (t − p_a)/‖t − p_a‖`` (3)  ``ω × R_a e + (I − uuᵀ)J_p,a/‖t − p_a‖``  ``e, t`` (6)
 ``COM``         ``Σ_k m_k p_k − t`` on chosen axes [m]           ``Σ_k m_k J_p,k``           ``t``, axes mask, ``m_k``
-``CLEARANCE``   ``min(0, sd(p_a) − lo)`` (1) [m]                ``∇sdᵀ ∂p_a`` when below     shape, ``R, c``, dims, lo
+``SPHERES``     ``min(0, min_k ‖s_ak − s_bk‖ − r_ak − r_bk − m)``  the closest pair's           count, m, pairs (8 each)
+``SOLIDS``      ``min(0, min_k sd(s_ak) − r_ak − m)`` (1) [m]    the closest sphere's         solid (16), m, count, spheres
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -35,10 +36,13 @@ residual's norm is ``2 sin(θ/2)`` of the angle θ between the axis and the line
 false minimum at θ = π); zero when the frame origin is at ``t``; its second order is left out. ``COM``: the centre
 of mass, a mass-weighted mean of the joints' mass points (frames at their bodies' centres of mass; their slots
 are the block's ``idx`` entries, ``m_k`` the mass fractions), on the axes of a 0/1 mask (rows: the mask's sum).
-``CLEARANCE``: the signed distance ``sd`` of frame ``a``'s origin to a solid (:data:`SOLID_SPHERE`,
-``SOLID_BOX``, ``SOLID_CAPSULE``, ``SOLID_HALFSPACE``; placed by a rotation ``R`` and centre ``c`` in the world,
-or in frame ``b`` when the block has one: a link's box; see :func:`solid_distance`) held at least ``lo`` (a
-sphere's radius plus a margin): one row, a hinge, zero when clear; its second order is left out.
+``SPHERES``: two bodies kept ``m`` apart through spheres fixed on them — on frames ``a`` and ``b`` (the bodies'
+joint frames), centres ``c`` in those frames, radii ``r``, listed in pairs — by the closest pair: one row, a hinge,
+whose Jacobian is the closest pair's (it switches pairs as the bodies move, like any distance between unions).
+``SOLIDS``: the spheres of frame ``a``'s body against one solid — a sphere, box, capsule or half-space
+(:data:`SOLID_SPHERE`, ...: a code, a rotation ``R`` and centre ``c``, dims; see :func:`solid_distance`) fixed in
+the world, or on frame ``b`` (a link's own box) — by the closest sphere.
+Both keep a collision term to one row per pair of bodies (or body and obstacle) however many spheres cover them.
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
 coordinate indices live in flat arrays addressed by ``PPTR`` / ``IPTR``.
@@ -51,11 +55,9 @@ import numpy as np
 
 # Block kinds
 (POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
- LOOK_AT, COM, CLEARANCE) = range(13)
-# Solids of a CLEARANCE block (its first parameter)
+ LOOK_AT, COM, SPHERES, SOLIDS) = range(14)
+# Solids of a SOLIDS block (its first parameter)
 SOLID_SPHERE, SOLID_BOX, SOLID_CAPSULE, SOLID_HALFSPACE = range(4)
-#: Parameters of a CLEARANCE block: solid, R (9, row-major), c (3), dims (3), lo.
-CLEARANCE_PARAMS = 17
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to
@@ -73,7 +75,7 @@ TWO_PI = 2.0 * np.pi
 @numba.njit(cache=True, inline="always")
 def is_hinge(kind) -> bool:
     """Whether a block kind is one-sided: zero residual and Jacobian inside its allowed set (an inequality)."""
-    return kind == DISTANCE or kind == CONE or kind == CLEARANCE
+    return kind == DISTANCE or kind == CONE or kind == SPHERES or kind == SOLIDS
 
 
 @numba.njit(cache=True, inline="always")
@@ -218,8 +220,10 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     if fb >= 0:
                         g -= u0 * Jf[fb, 0, i] + u1 * Jf[fb, 1, i] + u2 * Jf[fb, 2, i]
                 Jr[row, i] = g
-    elif kind == CLEARANCE:
-        clearance_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, E9)
+    elif kind == SPHERES:
+        spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n)
+    elif kind == SOLIDS:
+        solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, E9)
     elif kind == COORDINATES:
         q = bint[b, IPTR]
         for c in range(rows):
@@ -242,45 +246,117 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
     return rows
 
 
+@numba.njit(cache=True, inline="always")
+def _on_frame(out, f, c0, c1, c2):
+    """The offset ``R_f c`` (3 scalars) of a point fixed at ``c`` in frame ``f``."""
+    return (out[f, 0] * c0 + out[f, 1] * c1 + out[f, 2] * c2, out[f, 3] * c0 + out[f, 4] * c1 + out[f, 5] * c2,
+            out[f, 6] * c0 + out[f, 7] * c1 + out[f, 8] * c2)
+
+
 @numba.njit(cache=True)
-def clearance_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
-    """The ``CLEARANCE`` residual ``min(0, sd − lo)`` of frame ``a``'s origin against a solid fixed in the world
-    (``fb < 0``) or on frame ``b`` (its placement given in ``b``), and its Jacobian ``∇sdᵀ ∂p_rel``: for a solid
-    on ``b``, the point moves relative to it by ``J_p,a − J_p,b − ω_b × (p_a − p_b)``. ``g (3,)`` scratch."""
-    x, y, z = out[fa, 9], out[fa, 10], out[fa, 11]
-    if fb >= 0:  # the point in frame b: R_bᵀ (p_a − p_b)
-        v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
-        x = out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2
-        y = out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2
-        z = out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2
-    sd = solid_distance(x, y, z, params, p, g)
-    below = sd < params[p + 16]
-    r[row] = sd - params[p + 16] if below else 0.0
+def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -> None:
+    """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_k ‖(p_a + R_a c_ak) − (p_b + R_b c_bk)‖ − r_ak
+    − r_bk − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
+    ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame)."""
+    count, margin = int(params[p]), params[p + 1]
+    best, arg = 1e300, -1
+    for k in range(count):
+        q = p + 2 + 8 * k
+        a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+        b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
+        v0 = out[fa, 9] + a0 - out[fb, 9] - b0
+        v1 = out[fa, 10] + a1 - out[fb, 10] - b1
+        v2 = out[fa, 11] + a2 - out[fb, 11] - b2
+        d = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2) - params[q + 3] - params[q + 7]
+        if d < best:
+            best, arg = d, k
+    below = best - margin < 0.0
+    r[row] = best - margin if below else 0.0
     if not want_jacobian:
         return
     if not below:
         for i in range(n):
             Jr[row, i] = 0.0
         return
-    g0, g1, g2 = g[0], g[1], g[2]
-    if fb < 0:
-        for i in range(n):
-            Jr[row, i] = g0 * Jf[fa, 0, i] + g1 * Jf[fa, 1, i] + g2 * Jf[fa, 2, i]
-        return
-    w0 = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2  # the gradient in the world: R_b g
-    w1 = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
-    w2 = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
-    d0, d1, d2 = out[fa, 9] - out[fb, 9], out[fa, 10] - out[fb, 10], out[fa, 11] - out[fb, 11]
-    c0, c1, c2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0  # d × w: w·(ω × d) = ω·(d × w)
+    q = p + 2 + 8 * arg
+    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
+    v0 = out[fa, 9] + a0 - out[fb, 9] - b0
+    v1 = out[fa, 10] + a1 - out[fb, 10] - b1
+    v2 = out[fa, 11] + a2 - out[fb, 11] - b2
+    norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if norm > 0.0:
+        u0, u1, u2 = v0 / norm, v1 / norm, v2 / norm
+    else:
+        u0, u1, u2 = 0.0, 0.0, 1.0
+    ca0, ca1, ca2 = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0  # o_a × u
+    cb0, cb1, cb2 = b1 * u2 - b2 * u1, b2 * u0 - b0 * u2, b0 * u1 - b1 * u0
     for i in range(n):
-        Jr[row, i] = (w0 * (Jf[fa, 0, i] - Jf[fb, 0, i]) + w1 * (Jf[fa, 1, i] - Jf[fb, 1, i])
-                      + w2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
-                      - (c0 * Jf[fb, 3, i] + c1 * Jf[fb, 4, i] + c2 * Jf[fb, 5, i]))
+        Jr[row, i] = (u0 * (Jf[fa, 0, i] - Jf[fb, 0, i]) + u1 * (Jf[fa, 1, i] - Jf[fb, 1, i])
+                      + u2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
+                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i]
+                      - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
+
+
+@numba.njit(cache=True)
+def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
+    """:func:`solid_distance` of a world point to the solid at ``params[p:]``, fixed in the world (``fb < 0``) or
+    on frame ``fb``; the gradient ``g`` in the world."""
+    if fb < 0:
+        return solid_distance(x, y, z, params, p, g)
+    v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
+    sd = solid_distance(out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2,
+                        out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2,
+                        out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2, params, p, g)
+    g0, g1, g2 = g[0], g[1], g[2]
+    g[0] = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2
+    g[1] = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
+    g[2] = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
+    return sd
+
+
+@numba.njit(cache=True)
+def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
+    """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
+    frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
+    sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
+    margin, count = params[p + 16], int(params[p + 17])
+    best, arg = 1e300, -1
+    for k in range(count):
+        q = p + 18 + 4 * k
+        a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+        d = _solid_point_distance(out, fb, out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2, params, p, g) \
+            - params[q + 3]
+        if d < best:
+            best, arg = d, k
+    below = best - margin < 0.0
+    r[row] = best - margin if below else 0.0
+    if not want_jacobian:
+        return
+    if not below:
+        for i in range(n):
+            Jr[row, i] = 0.0
+        return
+    q = p + 18 + 4 * arg
+    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    s0, s1, s2 = out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2
+    _solid_point_distance(out, fb, s0, s1, s2, params, p, g)
+    w0, w1, w2 = g[0], g[1], g[2]
+    ca0, ca1, ca2 = a1 * w2 - a2 * w1, a2 * w0 - a0 * w2, a0 * w1 - a1 * w0  # o × ∇sd
+    for i in range(n):
+        Jr[row, i] = (w0 * Jf[fa, 0, i] + w1 * Jf[fa, 1, i] + w2 * Jf[fa, 2, i]
+                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i])
+    if fb >= 0:
+        d0, d1, d2 = s0 - out[fb, 9], s1 - out[fb, 10], s2 - out[fb, 11]
+        cb0, cb1, cb2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0
+        for i in range(n):
+            Jr[row, i] -= (w0 * Jf[fb, 0, i] + w1 * Jf[fb, 1, i] + w2 * Jf[fb, 2, i]
+                           + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
 
 
 @numba.njit(cache=True)
 def solid_distance(x, y, z, params, p, g) -> float:
-    """Signed distance [m] of the world point ``(x, y, z)`` to the solid of the CLEARANCE parameters at
+    """Signed distance [m] of the point ``(x, y, z)`` to the solid of the SOLIDS parameters at
     ``params[p:]`` (negative inside), and its gradient into ``g[:3]`` (world frame).
 
     The point in the solid's frame is ``q = Rᵀ(point − c)``; dims are: a sphere's radius; a box's half sides;
@@ -567,7 +643,7 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
     """
     kind = bint[b, KIND]
     if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION \
-            or kind == LOOK_AT or kind == CLEARANCE:
+            or kind == LOOK_AT or kind == SPHERES or kind == SOLIDS:
         return
     if kind == COM:  # Σ_k m_k μ·∂²p_k, exact
         p, q, count = bint[b, PPTR], bint[b, IPTR], bint[b, COUNT]

@@ -1,11 +1,11 @@
 """Collision avoidance as task terms on sphere covers: hinges on signed distances, zero when clear.
 
-Each sphere of a :class:`~framework.spheres.SphereCover` becomes a frame of the robot (``sphere[k]`` at its centre
-on its joint); a pair of spheres is one ``DISTANCE`` block held at least ``r_a + r_b + margin`` apart (the same
-compiled residual, Jacobian and second order as :class:`~framework.costs.Distance`), a sphere against a box or
-capsule — a link's own (``geometry[name]`` frames) or an obstacle — one ``CLEARANCE`` block (the signed distance
-to the solid), so every solver reads them through the one term interface. Links' boxes and capsules are used
-whole on one side of a pair because few spheres cover a flat box badly. They sit at the first priority level with the task: a collision is as wrong as a
+The spheres of a :class:`~framework.spheres.SphereCover` sit on the bodies (joints) they move with; each pair of
+bodies is one ``SPHERES`` row (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
+— a link's own (``geometry[name]`` frames) or an obstacle — one ``SOLIDS`` row (the closest sphere's signed
+distance to the solid), so a term has one row per pair of bodies however many spheres cover them, and every
+solver reads them through the one term interface. Links' boxes and capsules are used whole on one side of a pair
+because few spheres cover a flat box badly. They sit at the first priority level with the task: a collision is as wrong as a
 missed target. Each term also has an exact check (:meth:`Term.collisions`, coal on the URDF's geometry), which
 :func:`framework.solve` asks before it calls a solve a success.
 """
@@ -26,21 +26,12 @@ from . import blocks as B
 from .base import Term
 from .program import Block
 
-#: Stand-in for "no upper bound" in a DISTANCE block.
-FAR = 1e300
 
-
-def _sphere_frames(shape, cover) -> list[str]:
-    """Frames at the cover's sphere centres, added to the robot's model once (named by geometry and centre, so
-    two covers never share a frame that is not at the same place)."""
-    import hashlib
-
-    frames = []
-    for j, c, geometry in zip(cover.joints, cover.centers, cover.geometries):
-        name = f"sphere[{geometry}:{hashlib.sha1(np.asarray(c, dtype=float).tobytes()).hexdigest()[:8]}]"
-        shape.robot.add_frame(name, int(j), pin.SE3(np.eye(3), np.asarray(c, dtype=float)))
-        frames.append(name)
-    return frames
+def _body_frame(shape: RobotShape, joint: int) -> str:
+    """A frame on joint ``joint`` at the joint itself (the body's frame; sphere centres are given in it)."""
+    name = f"body[{shape.robot.model.names[int(joint)]}]"
+    shape.robot.add_frame(name, int(joint), pin.SE3.Identity())
+    return name
 
 
 def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3) -> str:
@@ -50,6 +41,26 @@ def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3
     return frame
 
 
+def _spheres_block(shape: RobotShape, cover: SphereCover, pairs: list[tuple[int, int]], margin: float) -> Block:
+    """One ``SPHERES`` block over sphere pairs ``(i, j)`` of the cover, every ``i`` on one body, every ``j`` on
+    another."""
+    i0, j0 = pairs[0]
+    rows = [np.r_[cover.centers[i], cover.radii[i], cover.centers[j], cover.radii[j]] for i, j in pairs]
+    frames = (_body_frame(shape, cover.joints[i0]), _body_frame(shape, cover.joints[j0]))
+    return Block(B.SPHERES, B.NORM, 1, frames, np.concatenate([[len(pairs), margin], *rows]), tolerance=B.TOL_LINEAR)
+
+
+def _solids_block(shape: RobotShape, cover: SphereCover, spheres: list[int], solid: np.ndarray, margin: float,
+                  solid_frame: str | None) -> Block:
+    """One ``SOLIDS`` block: the cover's ``spheres`` (all on one body) against ``solid`` (16 parameters), fixed in
+    the world or on ``solid_frame``."""
+    body = _body_frame(shape, cover.joints[spheres[0]])
+    rows = [np.r_[cover.centers[k], cover.radii[k]] for k in spheres]
+    frames = (body,) if solid_frame is None else (body, solid_frame)
+    return Block(B.SOLIDS, B.NORM, 1, frames, np.concatenate([solid, [margin, len(spheres)], *rows]),
+                 tolerance=B.TOL_LINEAR)
+
+
 def _margin(value: float, what: str) -> float:
     if isinstance(value, bool) or not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0):
         raise TaskError(f"{what} margin must be a distance >= 0 [m]; got {value!r}")
@@ -57,10 +68,13 @@ def _margin(value: float, what: str) -> float:
 
 
 class SelfCollision(Term):
-    """The robot's own links kept ``margin`` [m] apart: every pair of spheres on geometry pairs the
-    :class:`~framework.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out).
+    """The robot's own links kept ``margin`` [m] apart: the geometry pairs the
+    :class:`~framework.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out) that ever
+    come close (:meth:`~framework.collision.RobotShape.close_pairs`), through their sphere covers (or a link's own
+    box or capsule). The exact check tests every pair.
 
-    Residual: one row per sphere pair, ``‖c_a − c_b‖ − (r_a + r_b + margin)`` when negative, else 0 [m].
+    Residual: one row per pair of bodies, the smallest ``‖c_a − c_b‖ − (r_a + r_b)`` over their sphere pairs
+    (or signed distance of a sphere to a box minus its radius) minus the margin when negative, else 0 [m].
     """
 
     level = "task"
@@ -83,30 +97,32 @@ class SelfCollision(Term):
         return self.shape.check(x, distances=False)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
-        """Per geometry pair: the spheres of one against the other's box or capsule when it has one (the larger
-        such solid; ``CLEARANCE`` blocks on its frame, exact), else sphere against sphere (``DISTANCE``)."""
-        frames = _sphere_frames(self.shape, self.cover)
+        """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
+        other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
+        its frame)."""
         solids = self.shape.solids()
-        solid_frames = {name: _geometry_frame(self.shape, name, joint, placement)
-                        for name, (joint, placement, _, _) in solids.items()}
         spheres: dict[str, list[int]] = {}
         for k, geometry in enumerate(self.cover.geometries):
             spheres.setdefault(geometry, []).append(k)
-        blocks = []
-        for a, b in self.shape.pairs:
+        joints = self.cover.joints
+        sphere_pairs: dict[tuple[int, int], list[tuple[int, int]]] = {}
+        solid_sides: dict[tuple[str, int], set[int]] = {}
+        for a, b in sorted(self.shape.close_pairs()):
             if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
                 a, b = b, a  # b: the solid, a: the spheres
             if b in solids:
                 for i in spheres.get(a, ()):
-                    lo = self.cover.radii[i] + self.margin
-                    blocks.append(Block(B.CLEARANCE, B.NORM, 1, (frames[i], solid_frames[b]),
-                                        np.append(solids[b][2], lo), tolerance=B.TOL_LINEAR))
+                    solid_sides.setdefault((b, int(joints[i])), set()).add(i)
                 continue
             for i in spheres.get(a, ()):
                 for j in spheres.get(b, ()):
-                    gap = self.cover.radii[i] + self.cover.radii[j] + self.margin
-                    blocks.append(Block(B.DISTANCE, B.NORM, 1, (frames[i], frames[j]),
-                                        np.array([0.0, 0.0, 0.0, gap, FAR]), tolerance=B.TOL_LINEAR))
+                    pair = (i, j) if joints[i] <= joints[j] else (j, i)
+                    sphere_pairs.setdefault((int(joints[pair[0]]), int(joints[pair[1]])), []).append(pair)
+        blocks = [_spheres_block(self.shape, self.cover, pairs, self.margin) for pairs in sphere_pairs.values()]
+        for (name, _), ks in solid_sides.items():
+            joint, placement, solid, _ = solids[name]
+            blocks.append(_solids_block(self.shape, self.cover, sorted(ks), solid, self.margin,
+                                        _geometry_frame(self.shape, name, joint, placement)))
         if not blocks:
             raise TaskError(f"{self.name}: no pair of links to keep apart "
                             f"({len(self.shape.geometry.geometryObjects)} geometries)")
@@ -117,12 +133,13 @@ class SelfCollision(Term):
 
 
 class Obstacles(Term):
-    """The robot kept ``margin`` [m] clear of a :class:`~framework.scene.Scene`'s obstacles: every sphere of the
-    robot's cover that moves (not fixed to the world) against every solid, one ``CLEARANCE`` block each.
+    """The robot kept ``margin`` [m] clear of a :class:`~framework.scene.Scene`'s obstacles: the spheres of every
+    body that moves (not fixed to the world) against every solid.
 
-    Residual: one row per sphere and solid, ``sd(c) − (r + margin)`` when negative, else 0 [m] (``sd``: the signed
-    distance of the sphere's centre to the solid). The exact check reports the moving geometries against the
-    obstacles (not the robot's own pairs: :class:`SelfCollision` does that).
+    Residual: one row per body and solid, the smallest ``sd(c) − r`` over the body's spheres minus the margin
+    when negative, else 0 [m] (``sd``: the signed distance of a sphere's centre to the solid). The exact check
+    reports the moving geometries against the obstacles (not the robot's own pairs: :class:`SelfCollision` does
+    that).
     """
 
     level = "task"
@@ -147,15 +164,14 @@ class Obstacles(Term):
         return self.shape.check(x, scene=self.scene, self_pairs=False, distances=False)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
-        frames = _sphere_frames(self.shape, self.cover)
-        solids = self.scene.solids()
-        blocks = []
-        for k, frame in enumerate(frames):
-            if self.cover.joints[k] == 0:  # fixed to the world: where the user placed it
-                continue
-            lo = self.cover.radii[k] + self.margin
-            for solid in solids:
-                blocks.append(Block(B.CLEARANCE, B.NORM, 1, (frame,), np.append(solid, lo), tolerance=B.TOL_LINEAR))
+        """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are
+        solids too)."""
+        bodies: dict[int, list[int]] = {}
+        for k, joint in enumerate(self.cover.joints):
+            if joint != 0:  # fixed to the world: where the user placed it
+                bodies.setdefault(int(joint), []).append(k)
+        blocks = [_solids_block(self.shape, self.cover, ks, solid, self.margin, None)
+                  for ks in bodies.values() for solid in self.scene.solids()]
         if not blocks:
             raise TaskError(f"{self.name}: no moving sphere of the robot to keep clear")
         return tuple(blocks)

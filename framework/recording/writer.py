@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import RecordingError
+from ..scene import Scene
 from ..viewer import (
     DESIRED_COLOR,
     JOINT_COLOR,
@@ -23,11 +24,17 @@ from ..viewer import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..collision import RobotShape
     from ..problem import Problem
+    from ..spheres import SphereCover
     from ..robot import Robot
     from ..solve import IKResult
     from ..taskfile import Case, TaskFile
     from ..tracking import TrackingResult
+
+#: Colours of obstacles and of the collision spheres (RGBA 0-255).
+OBSTACLE_COLOR = (150, 110, 80, 200)
+SPHERE_COLOR = (80, 160, 220, 90)
 
 #: Mesh formats rerun's Asset3D reads directly; others (Collada .dae, ...) are converted with trimesh.
 ASSET_FORMATS = {
@@ -121,6 +128,8 @@ class Recorder:
             text = None
         if text is not None:
             recorder.log_text("task", f"```toml\n{text}\n```")
+        if len(task.scene):
+            recorder.log_scene(task.scene)
         return recorder
 
     def log_case(self, case: Case, result: IKResult | TrackingResult) -> str:
@@ -250,6 +259,26 @@ class Recorder:
         return self.stream
 
     # ------------------------------------------------------------------ IK solutions
+    def log_scene(self, scene: Scene) -> None:
+        """Draw a scene's obstacles (static, ``world/obstacles/<name>``; each obstacle says how:
+        :meth:`framework.scene.Box.rerun`, ...)."""
+        rr, stream = self._rr, self._require()
+        for obstacle in scene:
+            entity = f"world/obstacles/{entity_name(obstacle.name)}"
+            for path, archetype in obstacle.rerun(rr, OBSTACLE_COLOR):
+                stream.log(f"{entity}{path}", archetype, static=True)
+        stream.flush()
+
+    def log_spheres(self, cover: SphereCover, shape: RobotShape, x: np.ndarray, *, name: str = "spheres") -> None:
+        """Draw a sphere cover at configuration ``x`` (the fast collision model; ``world/<name>``), on the
+        timeline of the next solution."""
+        rr, stream = self._rr, self._require()
+        stream.set_time("solution", sequence=self._count)
+        stream.log(f"world/{entity_name(name)}", rr.Points3D(cover.world_centers(shape, x), radii=cover.radii,
+                                                              colors=[SPHERE_COLOR]))
+        stream.reset_time()
+        stream.flush()
+
     def log_solution(
         self,
         result: IKResult,

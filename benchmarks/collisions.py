@@ -1,0 +1,221 @@
+"""Collision-aware IK: success without collision by coal's exact check, and what the collision terms cost.
+
+(a) The mobile dual-arm youBot (13 DOF; paper 000's coordinated task: both hands at targets, base and arm motion
+weighted 0.1 / 0.4 / 0.4 on paper 000's previous configuration; the task first, the default). Paper 000's four
+targets, and random target pairs kept only when the unconstrained solve puts one arm into the other or into the
+platform: targets are the hands of uniform random configurations that coal finds collision-free — so a
+collision-free solution exists for every target, by construction — and the unconstrained optimum differs from the
+collision-free one for every kept target (it collides). Solved with ``SelfCollision(shape, margin=0.005)`` added.
+
+(b) PR2 (torso and both 7-DOF arms, 15 DOF; its SRDF's disabled pairs) reaching over a table (a 0.6 x 1.2 x 0.05 m
+box, top at 0.625 m): both grippers' positions and orientations at targets, motion 0.1 on the middle of the box.
+Targets are the grippers of uniform random configurations with both hands in front of the robot, above the table
+and no contact (self or table) by coal — collision-free solutions exist by construction. Solved with and without
+``Obstacles(shape, [table])``, and with ``SelfCollision(shape)`` added.
+
+Success: every position and orientation within 1e-6 m / 1e-6 rad AND no contact on the exact geometry (coal: the
+youBot's collision spheres and box, PR2's meshes) among the pairs the row names, checked afterwards here, for
+every variant. Times: the solve only (the
+problem is built before; building one packs the collision blocks, see the table), default hybrid, seeds 0, 1, ...
+
+    python benchmarks/collisions.py [--targets 100]
+
+Writes docs/results/collisions.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import report  # noqa: E402
+
+import framework as fw  # noqa: E402
+from framework.taskfile import load_task  # noqa: E402
+from tests.conftest import example_robot_data_dir  # noqa: E402
+
+OUT = report.ROOT / "docs" / "results" / "collisions.md"
+TOLERANCE = 1e-6
+PR2_HANDS = ("l_gripper_tool_frame", "r_gripper_tool_frame")
+PR2_ARM = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex", "wrist_roll")
+TABLE = fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table")
+
+
+def _strictly(problem: fw.Problem, result: fw.IKResult, shape: fw.RobotShape, scene: fw.Scene | None, *,
+              self_pairs: bool = True) -> tuple[bool, bool]:
+    """(every position and orientation term within tolerance, no contact by coal) at the result, whatever
+    collision terms the problem had."""
+    within = all(e <= TOLERANCE for name, e in result.errors.items() if "collision" not in name and "obstacles"
+                 not in name)
+    report_ = shape.check(result.configuration, scene=scene, self_pairs=self_pairs, distances=False)
+    return within, not report_.colliding
+
+
+def _timed(problem: fw.Problem, seed: int) -> tuple[fw.IKResult, float]:
+    t = time.perf_counter()
+    result = fw.solve(problem, seed=seed, tolerance=TOLERANCE)
+    return result, time.perf_counter() - t
+
+
+def _row(label: str, rows: list[tuple[bool, bool, float]]) -> str:
+    ok = np.array([a and b for a, b, _ in rows])
+    task = np.array([a for a, _, _ in rows])
+    clear = np.array([b for _, b, _ in rows])
+    ms = 1e3 * np.array([t for _, _, t in rows])
+    return (f"| {label} | {len(rows)} | {100 * task.mean():.1f} | {100 * clear.mean():.1f} | {100 * ok.mean():.1f} | "
+            f"{np.median(ms):.2f} | {np.percentile(ms, 95):.2f} |")
+
+
+HEADER = ["| solve | targets | task met % | no contact % | success % (both) | median ms | p95 ms |",
+          "|---|---:|---:|---:|---:|---:|---:|"]
+
+
+def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
+    task = load_task(report.ROOT / "tasks" / "youbot_dual_coordinated_ik.toml")
+    robot = task.robot
+    shape = fw.RobotShape(robot)
+    base = task.cases[0].problem.objective  # position terms first, then the motion terms
+    motion = fw.Objective(tuple((w, t) for w, t in base if not t.is_task))
+
+    def problems(t1, t2):
+        objective = 1.2 * fw.Position("arm1_ee", t1, name="e_t1") + 1.2 * fw.Position("arm2_ee", t2, name="e_t2") \
+            + motion
+        return fw.Problem(robot, objective), fw.Problem(robot, objective + fw.SelfCollision(shape, margin=0.005))
+
+    lines, rows_free, rows_coll = [], [], []
+    for problem in problems(np.array([0.5, -0.2, 0.45]), np.array([0.7, -0.5, 0.25])):  # compile before timing
+        fw.solve(problem)
+    for k, case in enumerate(task.cases):  # paper 000's four targets
+        t1, t2 = (t.target.copy() for _, t in case.problem.objective if t.is_task)
+        free, coll = problems(t1, t2)
+        for problem, rows in ((free, rows_free), (coll, rows_coll)):
+            result, seconds = _timed(problem, k)
+            rows.append((*_strictly(problem, result, shape, None), seconds))
+    paper = [_row("paper 000 targets, unconstrained", rows_free), _row("paper 000 targets, SelfCollision", rows_coll)]
+    kept_free, kept_coll, tries, build = [], [], 0, []
+    while len(kept_coll) < count and tries < 50 * count:
+        tries += 1
+        x = robot.random_configurations(rng, 1)[0]
+        if shape.check(x, distances=False).colliding:
+            continue
+        t1, t2 = (robot.frame_placement(x, f).translation for f in ("arm1_ee", "arm2_ee"))
+        free, coll = problems(t1, t2)
+        result, seconds = _timed(free, tries)
+        within, clear = _strictly(free, result, shape, None)
+        if clear:  # the unconstrained optimum is collision-free: not a target that tests the terms
+            continue
+        kept_free.append((within, clear, seconds))
+        t = time.perf_counter()
+        coll.program  # noqa: B018 - the packing, timed apart
+        build.append(time.perf_counter() - t)
+        result, seconds = _timed(coll, tries)
+        kept_coll.append((*_strictly(coll, result, shape, None), seconds))
+    lines += HEADER + paper + [_row("random targets the unconstrained solve collides on, unconstrained", kept_free),
+                               _row("the same targets, SelfCollision", kept_coll)]
+    lines += ["", f"{len(kept_coll)} random targets kept of {tries} drawn (the others: the sampled configuration "
+              "collides, or the unconstrained solve does not). Building a problem with the collision term "
+              f"(packing its blocks): median {1e3 * np.median(build):.2f} ms."]
+    stats = {"shape": shape, "robot": robot, "free": problems(*[np.zeros(3)] * 2)[0],
+             "coll": problems(*[np.zeros(3)] * 2)[1], "blocks": len(problems(*[np.zeros(3)] * 2)[1].program.task_blocks),
+             "spheres": len(shape.cover().radii), "pairs": len(shape.pairs)}
+    return lines, stats
+
+
+def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
+    erd = example_robot_data_dir()
+    joints = ["torso_lift_joint"] + [f"{side}_{name}_joint" for side in "lr" for name in PR2_ARM]
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    scene = fw.Scene((TABLE,))
+    top = TABLE.center[2] + TABLE.size[2] / 2
+    rest = robot.middle.copy()
+    table_only = fw.Obstacles(shape, scene)
+    collision = fw.SelfCollision(shape) + table_only
+    targets, tries = [], 0
+    while len(targets) < count:
+        tries += 1
+        x = robot.random_configurations(rng, 1)[0]
+        a, b = (robot.frame_placement(x, hand) for hand in PR2_HANDS)
+        if min(a.translation[0], b.translation[0]) < 0.45 or min(a.translation[2], b.translation[2]) < top + 0.03:
+            continue
+        if shape.check(x, scene=scene, distances=False).colliding:
+            continue
+        targets.append((a, b))
+    for extra in (None, table_only, collision):  # compile before timing
+        objective = fw.Pose(PR2_HANDS[0], targets[0][0]) + fw.Pose(PR2_HANDS[1], targets[0][1])
+        fw.solve(fw.Problem(robot, objective if extra is None else objective + extra), max_iterations=5)
+    rows_free, rows_table, rows_coll, build = [], [], [], []
+    for k, (a, b) in enumerate(targets):
+        objective = fw.Pose(PR2_HANDS[0], a) + fw.Pose(PR2_HANDS[1], b) + 0.1 * fw.Motion("all", rest)
+        free = fw.Problem(robot, objective)
+        table = fw.Problem(robot, objective + table_only)
+        coll = fw.Problem(robot, objective + collision)
+        t = time.perf_counter()
+        coll.program  # noqa: B018
+        build.append(time.perf_counter() - t)
+        for problem, rows, exact in ((free, rows_free, scene), (table, rows_table, None), (coll, rows_coll, scene)):
+            result, seconds = _timed(problem, k)
+            rows.append((*_strictly(problem, result, shape, scene, self_pairs=exact is not None), seconds))
+    lines = HEADER + [_row("unconstrained (checked: self + table)", rows_free),
+                      _row("Obstacles(table) (checked: table)", rows_table),
+                      _row("SelfCollision + Obstacles(table) (checked: self + table)", rows_coll)]
+    lines += ["", f"{count} targets of {tries} configurations drawn (the others: a hand behind x = 0.45 m or below "
+              f"the table top + 3 cm, or a contact). Building a problem with the collision terms: median "
+              f"{1e3 * np.median(build):.2f} ms."]
+    return lines, {"robot": robot, "free": fw.Problem(robot, fw.Pose(PR2_HANDS[0], targets[0][0])
+                                                        + 0.1 * fw.Motion("all", rest)),
+                   "coll": fw.Problem(robot, fw.Pose(PR2_HANDS[0], targets[0][0]) + 0.1 * fw.Motion("all", rest)
+                                      + collision),
+                   "blocks": len(fw.Problem(robot, collision).program.task_blocks), "spheres": len(shape.cover().radii),
+                   "pairs": len(shape.pairs)}
+
+
+def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -> list[str]:
+    """µs per call of Problem.cost, without and with the collision terms, at population 30 and 1000 (best of 5)."""
+    lines = ["| robot | sphere pairs / spheres / collision blocks | pop | without µs | with µs | ratio |",
+             "|---|---|---:|---:|---:|---:|"]
+    for name, s in setups:
+        for pop in (30, 1000):
+            X = s["robot"].random_configurations(rng, pop)
+            times = []
+            for problem in (s["free"], s["coll"]):
+                problem.cost(X)
+                best = np.inf
+                for _ in range(5):
+                    t = time.perf_counter()
+                    problem.cost(X)
+                    best = min(best, time.perf_counter() - t)
+                times.append(1e6 * best)
+            lines.append(f"| {name} | {s['pairs']} / {s['spheres']} / {s['blocks']} | {pop} | {times[0]:.1f} | "
+                         f"{times[1]:.1f} | {times[1] / times[0]:.1f} |")
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--targets", type=int, default=100)
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args()
+    before = report.load()
+    rng = np.random.default_rng(2026)
+    youbot_lines, youbot_setup = youbot(args.targets, rng)
+    pr2_lines, pr2_setup = pr2(args.targets, rng)
+    cost_lines = population_costs([("youBot dual mobile", youbot_setup), ("PR2 + table", pr2_setup)], rng)
+    after = report.load()
+    paragraphs = __doc__.split("\n\n")
+    body = "\n".join([*paragraphs[1:5], "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
+                      "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
+                      "## Population cost of the collision terms", "", population_costs.__doc__, "", *cost_lines])
+    print(body)
+    report.write(args.out, "Collision-aware IK: success without collision, and its cost", body, loads=(before, after))
+
+
+if __name__ == "__main__":
+    main()
