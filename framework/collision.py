@@ -120,7 +120,7 @@ class RobotShape:
             self.geometry.removeCollisionPair(self.geometry.collisionPairs[int(k)])
         self._geometry_data = self.geometry.createData()
 
-    def cover(self, *, per_geometry: int = 4, max_radius: float | None = None, samples: int = 1500,
+    def cover(self, *, per_geometry: int = 4, max_radius: float | None = 0.08, samples: int = 1500,
               seed: int = 0) -> SphereCover:
         """The sphere cover of every geometry (:func:`framework.spheres.sphere_cover`), computed once per
         setting."""

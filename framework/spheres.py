@@ -135,7 +135,7 @@ def fit_spheres(points: np.ndarray, count: int, rng: np.random.Generator, *, ite
     return centers[keep], radii[keep]
 
 
-def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, max_radius: float | None = None, samples: int = 1500,
+def sphere_cover(shape: RobotShape, *, per_geometry: int = 4, max_radius: float | None = 0.08, samples: int = 1500,
                  seed: int = 0) -> SphereCover:
     """Cover every collision geometry of ``shape`` by spheres (see the module docstring; a sphere by itself):
     ``per_geometry`` spheres, doubled (up to 64) while the largest is over ``max_radius`` [m] (a sphere geometry

@@ -14,7 +14,7 @@ from framework.costs.blocks import solid_distance
 from framework.engine import residuals
 from framework.errors import TaskError
 from framework.spheres import SphereCover
-from framework.taskfile import load_task
+from framework.taskfile import load_task, resolve_task
 from tests.test_collision import L, R, SPHERES
 
 TURNED = pin.rpy.rpyToMatrix(0.3, -0.5, 1.1)
@@ -294,3 +294,23 @@ def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, arm):
         assert rec.values(f"/world/obstacles/{entity}", component)[1], entity
     _, points = rec.values("/world/spheres", "Points3D:positions", "solution")
     np.testing.assert_allclose(np.array(points[0]), exact.world_centers(shape, x), atol=1e-6)
+
+
+def test_tracking_paper000_circle_around_a_table():
+    """tasks/paper000_circular_table.toml: the table cuts the unconstrained solution at every point (coal), the
+    collision-aware run at none, and still follows the path (a few points at the arms' reach give up to 2 mm)."""
+    from framework.tracking import track
+
+    results = {}
+    for name in ("paper000_circular", "paper000_circular_table"):
+        task = load_task(resolve_task(name), points=20)
+        case = task.cases[0]
+        results[name] = track(task.robot, case.trajectory, case.builder, initial=case.initial, tolerance=1e-6)
+    table_task = load_task(resolve_task("paper000_circular_table"), points=20)
+    shape = fw.RobotShape(table_task.robot)
+    free, safe = results["paper000_circular"], results["paper000_circular_table"]
+    assert all(shape.check(q, scene=table_task.scene, self_pairs=False, distances=False).colliding
+               for q in free.configurations)
+    assert not any(shape.check(q, scene=table_task.scene, distances=False).colliding for q in safe.configurations)
+    assert len(safe.configurations) == 20
+    assert np.mean(safe.position_error <= 1e-6) >= 0.85 and safe.position_error.max() <= 2e-3

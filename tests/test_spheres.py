@@ -39,7 +39,7 @@ def _uncovered(shape: RobotShape, cover, seed: int) -> float:
 
 def test_primitives_are_covered():
     shape = RobotShape(fw.robot_from_urdf(PRIMITIVES))
-    cover = sphere_cover(shape, per_geometry=4, samples=1500)
+    cover = sphere_cover(shape, per_geometry=4, max_radius=None, samples=1500)
     assert len(cover.radii) <= 4 * shape.geometry.ngeoms
     assert _uncovered(shape, cover, seed=99) <= 1e-12  # a sphere covers itself: its surface points at r, to rounding
 
@@ -47,7 +47,7 @@ def test_primitives_are_covered():
 @pytest.mark.parametrize("path", ["panda_description/urdf/panda.urdf", "pr2_description/urdf/pr2.urdf"])
 def test_meshes_of_real_robots_are_covered(erd, path):
     shape = RobotShape(fw.load_robot(erd / path))
-    cover = sphere_cover(shape, per_geometry=4, samples=1500)
+    cover = sphere_cover(shape, per_geometry=4, max_radius=None, samples=1500)
     assert _uncovered(shape, cover, seed=7) <= 0.0
 
 
@@ -73,7 +73,7 @@ def test_a_radius_bound_doubles_the_spheres_until_it_holds():
     """max_radius: spheres are added (doubling, up to 64) until none is larger; the cover still holds the
     surface. A 4-sphere cover of these primitives has spheres over 6 cm (shown), the bounded one none."""
     shape = RobotShape(fw.robot_from_urdf(PRIMITIVES))
-    loose = sphere_cover(shape, per_geometry=4)
+    loose = sphere_cover(shape, per_geometry=4, max_radius=None)
     tight = sphere_cover(shape, per_geometry=4, max_radius=0.06)
     assert loose.radii.max() > 0.06
     counts = {g: tight.geometries.count(g) for g in set(tight.geometries) if g != "b_1"}  # b_1: a sphere, itself
