@@ -22,7 +22,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -104,7 +103,7 @@ class RobotShape:
         self._geometry_data = geometry.createData()
         if always > 0:
             self._remove_always_colliding(always)
-        self._covers: dict[tuple, Any] = {}  # sphere covers and close pairs, by their settings
+        self._covers: dict[tuple, SphereCover] = {}
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
     def _remove_always_colliding(self, samples: int) -> None:
@@ -128,26 +127,6 @@ class RobotShape:
         if key not in self._covers:
             self._covers[key] = sphere_cover(self, per_geometry=per_geometry, max_radius=max_radius,
                                              samples=samples, seed=seed)
-        return self._covers[key]
-
-    def close_pairs(self, *, samples: int = 1000, within: float = 0.02) -> frozenset[tuple[str, str]]:
-        """The checked pairs that come within ``within`` [m] of each other in at least one of ``samples`` uniform
-        random configurations (seeded), by coal on the exact geometry — the pairs a collision term needs. The
-        others (two shoulders always apart, say) are left out of the sphere terms, where their fat covers could
-        overlap although the links never meet: MoveIt's "never in collision" rule; unlike MoveIt, the exact check
-        still tests them, so a pair the samples missed can only turn a success into a failure, never the
-        reverse."""
-        key = ("close", samples, within)
-        if key not in self._covers:
-            geometry, data = self.geometry, self.geometry.createData()
-            for request in data.collisionRequests:
-                request.security_margin = within
-            close = np.zeros(len(geometry.collisionPairs), dtype=bool)
-            for x in self.robot.random_configurations(np.random.default_rng(1), samples):
-                pin.computeCollisions(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x), False)
-                close |= np.array([r.isCollision() for r in data.collisionResults], dtype=bool)
-            names = self.pairs
-            self._covers[key] = frozenset(names[k] for k in np.flatnonzero(close))
         return self._covers[key]
 
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:

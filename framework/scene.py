@@ -3,7 +3,8 @@
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
 for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.blocks.solid_distance`),
 the exact check builds coal geometry from it (:meth:`framework.collision.RobotShape.check` with ``scene=``),
-recordings draw it, and task files give it as ``[[obstacles]]`` tables::
+recordings and meshcat draw it (each obstacle's ``rerun`` / ``meshcat`` method), and task files give it as
+``[[obstacles]]`` tables::
 
     table = Box(center=[0.6, 0.0, 0.35], size=[0.8, 1.2, 0.05])
     scene = Scene((table, Plane(point=[0, 0, 0], normal=[0, 0, 1]), Sphere([0.4, 0.2, 0.8], 0.1)))
@@ -58,6 +59,12 @@ def _rotation(value: Any, what: str) -> np.ndarray:
     return np.eye(3) if value is None else rotation_target(value, None, None, what)
 
 
+def _placement(rotation: np.ndarray, center: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = rotation, center
+    return T
+
+
 def _xyzw(rr, rotation: np.ndarray):
     return rr.Quaternion(xyzw=pin.Quaternion(np.asarray(rotation)).coeffs())
 
@@ -87,6 +94,10 @@ class Sphere:
         """``(sub-entity, rerun archetype)`` pairs that draw it."""
         return [("", rr.Ellipsoids3D(centers=[self.center], half_sizes=[[self.radius] * 3], colors=[color],
                                      fill_mode="solid"))]
+
+    def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
+        """``(sub-path, meshcat geometry, 4x4 placement)`` triples that draw it."""
+        return [("", g.Sphere(self.radius), _placement(np.eye(3), self.center))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """The exact geometry and its placement in the world."""
@@ -119,6 +130,9 @@ class Box:
         return [("", rr.Boxes3D(centers=[self.center], half_sizes=[self.size / 2], quaternions=[_xyzw(rr, self.rotation)],
                                 colors=[color], fill_mode="solid"))]
 
+    def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
+        return [("", g.Box(self.size.tolist()), _placement(self.rotation, self.center))]
+
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
 
@@ -149,6 +163,14 @@ class Capsule:
         end = self.center - self.rotation[:, 2] * self.length / 2  # rerun places a capsule by one end
         return [("", rr.Capsules3D(lengths=[self.length], radii=[self.radius], translations=[end],
                                    quaternions=[_xyzw(rr, self.rotation)], colors=[color], fill_mode="solid"))]
+
+    def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
+        """A cylinder (meshcat's run along y: turned onto z) and a sphere on each end."""
+        R, axis = self.rotation, self.rotation[:, 2]
+        along_z = np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]])
+        return [("/body", g.Cylinder(self.length, self.radius), _placement(R @ along_z, self.center)),
+                ("/end0", g.Sphere(self.radius), _placement(R, self.center - axis * self.length / 2)),
+                ("/end1", g.Sphere(self.radius), _placement(R, self.center + axis * self.length / 2))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
@@ -185,6 +207,10 @@ class Plane:
         R = self.rotation
         return [("", rr.Boxes3D(centers=[self.point - R[:, 2] * 5e-4], half_sizes=[[1.0, 1.0, 5e-4]],
                                 quaternions=[_xyzw(rr, R)], colors=[color], fill_mode="solid"))]
+
+    def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
+        R = self.rotation
+        return [("", g.Box([2.0, 2.0, 1e-3]), _placement(R, self.point - R[:, 2] * 5e-4))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """A wide, deep box whose top face is the plane (coal's half-spaces have no distance to meshes)."""
@@ -238,6 +264,14 @@ class Mesh:
         return [("", rr.Transform3D(translation=self.center, mat3x3=self.rotation)),
                 ("/mesh", rr.Mesh3D(vertex_positions=mesh.vertices, triangle_indices=mesh.faces,
                                     albedo_factor=color))]
+
+    def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
+        import trimesh
+
+        mesh = trimesh.load(str(self.path), force="mesh")
+        mesh.apply_scale(self.scale)
+        return [("", g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
+                 _placement(self.rotation, self.center))]
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal

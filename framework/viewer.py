@@ -273,6 +273,10 @@ def segment_transforms(segments: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return T, np.maximum(length, 1e-6)
 
 
+#: Obstacles' colour in meshcat (RGB 0-255).
+OBSTACLE_RGB = (150, 110, 80)
+
+
 class Viewer:
     """A meshcat scene of one robot: show configurations, animate joint paths, draw targets and paths.
 
@@ -453,6 +457,16 @@ class Viewer:
             g.PointsGeometry(P.T.astype(np.float32)), g.LineBasicMaterial(color=_hex(color), linewidth=2)
         )
         self.vis[f"paths/{name}"].set_object(line)
+
+    def add_scene(self, scene, *, color: Sequence[int] = OBSTACLE_RGB) -> None:
+        """A :class:`~framework.scene.Scene`'s obstacles under ``obstacles/<name>``."""
+        g = self._g
+        material = g.MeshLambertMaterial(color=_hex(color), opacity=0.8, transparent=True)
+        for obstacle in scene:
+            for sub, geometry, T in obstacle.meshcat(g):
+                node = self.vis[f"obstacles/{obstacle.name}{sub}"]
+                node.set_object(geometry, material)
+                node.set_transform(T)
 
     def set_camera(self, position: Sequence[float] | None = None) -> None:
         """Place the camera at ``position`` [m, world, Z up], looking at the world origin (meshcat's orbit

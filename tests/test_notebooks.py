@@ -31,6 +31,7 @@ def test_the_learning_path_is_complete():
         "03_new_robot",
         "04_compare_solvers",
         "05_real_robots",
+        "06_collisions",
     ]
 
 

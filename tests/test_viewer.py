@@ -107,6 +107,26 @@ def test_viewer_draws_animates_and_stops_its_server(tmp_path):
     assert set(tracks) == {".position", ".quaternion", ".scale"} and len(tracks[".position"]) == len(Q)
 
 
+def test_viewer_draws_every_obstacle_kind_at_its_place(tmp_path):
+    import trimesh
+
+    path = tmp_path / "block.stl"
+    trimesh.creation.box(extents=[0.1, 0.1, 0.1]).export(path)
+    scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.4, 0.2, 0.1], name="table"), fw.Sphere([0, 0, 1], 0.1),
+                      fw.Capsule([0, 1, 0], 0.05, 0.4), fw.Plane([0, 0, -0.1], [0, 0, 1]),
+                      fw.Mesh(path, center=[1, 1, 0])))
+    with Viewer(fw.load_robot("youbot_arm")) as viewer:
+        viewer.add_scene(scene)
+        html = viewer.static_html()
+    commands = _commands(html)
+    objects = {c["path"] for c in commands if c["type"] == "set_object"}
+    assert {"/meshcat/obstacles/table", "/meshcat/obstacles/sphere", "/meshcat/obstacles/capsule/body",
+            "/meshcat/obstacles/capsule/end0", "/meshcat/obstacles/plane", "/meshcat/obstacles/mesh"} <= objects
+    placed = {c["path"]: np.array(c["matrix"]).reshape(4, 4).T for c in commands if c["type"] == "set_transform"}
+    np.testing.assert_allclose(placed["/meshcat/obstacles/table"][:3, 3], [0.5, 0.0, 0.3])
+    np.testing.assert_allclose(placed["/meshcat/obstacles/capsule/end1"][:3, 3], [0, 1, 0.2], atol=1e-12)
+
+
 def _commands(html: str) -> list[dict]:
     """The meshcat commands embedded in an exported page (base64 msgpack, as meshcat writes them)."""
     import base64

@@ -69,9 +69,8 @@ def _margin(value: float, what: str) -> float:
 
 class SelfCollision(Term):
     """The robot's own links kept ``margin`` [m] apart: the geometry pairs the
-    :class:`~framework.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out) that ever
-    come close (:meth:`~framework.collision.RobotShape.close_pairs`), through their sphere covers (or a link's own
-    box or capsule). The exact check tests every pair.
+    :class:`~framework.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out), through
+    their sphere covers (or a link's own box or capsule).
 
     Residual: one row per pair of bodies, the smallest ``‖c_a − c_b‖ − (r_a + r_b)`` over their sphere pairs
     (or signed distance of a sphere to a box minus its radius) minus the margin when negative, else 0 [m].
@@ -107,7 +106,7 @@ class SelfCollision(Term):
         joints = self.cover.joints
         sphere_pairs: dict[tuple[int, int], list[tuple[int, int]]] = {}
         solid_sides: dict[tuple[str, int], set[int]] = {}
-        for a, b in sorted(self.shape.close_pairs()):
+        for a, b in self.shape.pairs:
             if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
                 a, b = b, a  # b: the solid, a: the spheres
             if b in solids:
