@@ -18,6 +18,9 @@ youBot's collision spheres and box, PR2's meshes) among the pairs the row names,
 every variant. Times: the solve only (the
 problem is built before; building one packs the collision blocks, see the table), default hybrid, seeds 0, 1, ...
 
+(c) Paper 000's circular path tracked with and without a table placed where the unconstrained solution's platform
+stands (``tasks/paper000_circular_table.toml``): points in contact, by coal.
+
     python benchmarks/collisions.py [--targets 100]
 
 Writes docs/results/collisions.md.
@@ -177,6 +180,29 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                    "pairs": len(shape.pairs)}
 
 
+def tracking() -> list[str]:
+    """Paper 000's circle (200 points) with and without the table of tasks/paper000_circular_table.toml."""
+    from framework.tracking import track
+
+    lines = ["| run | points | points in contact with the table (coal) | points in self-contact | max position error "
+             "[m] | points within 1e-6 m | time [s] |", "|---|---:|---:|---:|---:|---:|---:|"]
+    table_task = load_task(report.ROOT / "tasks" / "paper000_circular_table.toml")
+    shape = fw.RobotShape(table_task.robot)
+    for name, label in (("paper000_circular", "unconstrained (tasks/paper000_circular.toml, hybrid)"),
+                        ("paper000_circular_table", "with the table (tasks/paper000_circular_table.toml)")):
+        task = load_task(report.ROOT / "tasks" / f"{name}.toml")
+        case = task.cases[0]
+        t = time.perf_counter()
+        result = track(task.robot, case.trajectory, case.builder, initial=case.initial, tolerance=TOLERANCE)
+        seconds = time.perf_counter() - t
+        Q = result.configurations
+        table = sum(shape.check(q, scene=table_task.scene, self_pairs=False, distances=False).colliding for q in Q)
+        itself = sum(shape.check(q, distances=False).colliding for q in Q)
+        lines.append(f"| {label} | {len(Q)} | {table} | {itself} | {result.position_error.max():.1e} | "
+                     f"{int((result.position_error <= TOLERANCE).sum())} | {seconds:.1f} |")
+    return lines
+
+
 def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -> list[str]:
     """µs per call of Problem.cost, without and with the collision terms, at population 30 and 1000 (best of 5)."""
     lines = ["| robot | sphere pairs / spheres / collision blocks | pop | without µs | with µs | ratio |",
@@ -207,11 +233,13 @@ def main() -> None:
     rng = np.random.default_rng(2026)
     youbot_lines, youbot_setup = youbot(args.targets, rng)
     pr2_lines, pr2_setup = pr2(args.targets, rng)
+    tracking_lines = tracking()
     cost_lines = population_costs([("youBot dual mobile", youbot_setup), ("PR2 + table", pr2_setup)], rng)
     after = report.load()
     paragraphs = __doc__.split("\n\n")
-    body = "\n".join([*paragraphs[1:5], "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
+    body = "\n".join([*paragraphs[1:6], "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
                       "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
+                      "## (c) Tracking paper 000's circle around a table", "", tracking.__doc__, "", *tracking_lines, "",
                       "## Population cost of the collision terms", "", population_costs.__doc__, "", *cost_lines])
     print(body)
     report.write(args.out, "Collision-aware IK: success without collision, and its cost", body, loads=(before, after))

@@ -3,8 +3,9 @@
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
 for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.blocks.solid_distance`),
 the exact check builds coal geometry from it (:meth:`framework.collision.RobotShape.check` with ``scene=``),
-recordings and meshcat draw it (each obstacle's ``rerun`` / ``meshcat`` method), and task files give it as
-``[[obstacles]]`` tables::
+recordings and meshcat draw it (each obstacle's ``rerun`` / ``meshcat`` method), M-FABRIK plans its base around
+their shadows on the floor (``footprint``, :meth:`framework.fabrik.Environment.from_scene`), and task files give
+it as ``[[obstacles]]`` tables::
 
     table = Box(center=[0.6, 0.0, 0.35], size=[0.8, 1.2, 0.05])
     scene = Scene((table, Plane(point=[0, 0, 0], normal=[0, 0, 1]), Sphere([0.4, 0.2, 0.8], 0.1)))
@@ -59,6 +60,21 @@ def _rotation(value: Any, what: str) -> np.ndarray:
     return np.eye(3) if value is None else rotation_target(value, None, None, what)
 
 
+def _ring(center: np.ndarray, radius: float, sides: int = 32) -> np.ndarray:
+    """A horizontal ``sides``-gon around a ball's shadow, circumscribed (its sides touch the circle) ``(sides, 3)``."""
+    angles = np.linspace(0, 2 * np.pi, sides, endpoint=False)
+    r = radius / np.cos(np.pi / sides)
+    return np.column_stack([center[0] + r * np.cos(angles), center[1] + r * np.sin(angles), np.zeros(sides)])
+
+
+def _hull(points: np.ndarray) -> np.ndarray:
+    """The convex hull ``(k, 2)`` of points' (x, y), counter-clockwise."""
+    from scipy.spatial import ConvexHull
+
+    xy = np.asarray(points, dtype=float)[:, :2]
+    return xy[ConvexHull(xy).vertices]
+
+
 def _placement(rotation: np.ndarray, center: np.ndarray) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = rotation, center
@@ -99,6 +115,10 @@ class Sphere:
         """``(sub-path, meshcat geometry, 4x4 placement)`` triples that draw it."""
         return [("", g.Sphere(self.radius), _placement(np.eye(3), self.center))]
 
+    def footprint(self) -> np.ndarray | None:
+        """Its shadow on the floor (x, y): a convex polygon ``(k, 2)`` [m] containing it (M-FABRIK's obstacles)."""
+        return _hull(_ring(self.center, self.radius))
+
     def coal(self) -> tuple[Any, pin.SE3]:
         """The exact geometry and its placement in the world."""
         import coal
@@ -132,6 +152,10 @@ class Box:
 
     def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
         return [("", g.Box(self.size.tolist()), _placement(self.rotation, self.center))]
+
+    def footprint(self) -> np.ndarray | None:
+        corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * self.size / 2
+        return _hull(corners @ self.rotation.T + self.center)
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
@@ -172,6 +196,10 @@ class Capsule:
                 ("/end0", g.Sphere(self.radius), _placement(R, self.center - axis * self.length / 2)),
                 ("/end1", g.Sphere(self.radius), _placement(R, self.center + axis * self.length / 2))]
 
+    def footprint(self) -> np.ndarray | None:
+        axis = self.rotation[:, 2] * self.length / 2
+        return _hull(np.vstack([_ring(self.center - axis, self.radius), _ring(self.center + axis, self.radius)]))
+
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
 
@@ -211,6 +239,13 @@ class Plane:
     def meshcat(self, g) -> list[tuple[str, Any, np.ndarray]]:
         R = self.rotation
         return [("", g.Box([2.0, 2.0, 1e-3]), _placement(R, self.point - R[:, 2] * 5e-4))]
+
+    def footprint(self) -> np.ndarray | None:
+        """None for a floor or a ceiling (horizontal); a wall's shadow is unbounded: an error."""
+        if abs(self.normal[2]) > 1 - 1e-9:
+            return None
+        raise TaskError(f"{self.name}: a tilted or vertical plane has no bounded footprint on the floor; "
+                        "use a box for a wall")
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """A wide, deep box whose top face is the plane (coal's half-spaces have no distance to meshes)."""
@@ -272,6 +307,12 @@ class Mesh:
         mesh.apply_scale(self.scale)
         return [("", g.TriangularMeshGeometry(np.asarray(mesh.vertices), np.asarray(mesh.faces)),
                  _placement(self.rotation, self.center))]
+
+    def footprint(self) -> np.ndarray | None:
+        import trimesh
+
+        vertices = np.asarray(trimesh.load(str(self.path), force="mesh").vertices) * self.scale
+        return _hull(vertices @ self.rotation.T + self.center)
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal

@@ -314,3 +314,48 @@ def test_tracking_paper000_circle_around_a_table():
     assert not any(shape.check(q, scene=table_task.scene, distances=False).colliding for q in safe.configurations)
     assert len(safe.configurations) == 20
     assert np.mean(safe.position_error <= 1e-6) >= 0.85 and safe.position_error.max() <= 2e-3
+
+
+def test_m_fabrik_plans_around_the_shadows_of_the_same_scene(tmp_path):
+    """Environment.from_scene: every obstacle's floor shadow contains its exact projection (dense surface
+    samples), a floor plane casts none, a wall is an error; a reach task's [[obstacles]] become M-FABRIK's
+    obstacles and its base stays out of them."""
+    import shapely.geometry as sg
+
+    from framework.fabrik import Environment
+    from framework.spheres import surface_points
+
+    scene = fw.Scene((fw.Box([0.8, 0.2, 0.3], [0.3, 0.4, 0.6], TURNED), fw.Sphere([-0.5, 0.5, 0.2], 0.2),
+                      fw.Capsule([0.0, -0.8, 0.3], 0.1, 0.6, TURNED), fw.Plane([0, 0, 0], [0, 0, 1])))
+    environment = Environment.from_scene(scene, margin=0.1)
+    assert len(environment.obstacles) == 3
+    for obstacle, polygon in zip(scene.obstacles[:3], environment.obstacles):
+        shape, placement = obstacle.coal()
+        points = surface_points(shape, 4000, np.random.default_rng(0)) @ placement.rotation.T + placement.translation
+        hull = sg.Polygon(polygon.vertices).buffer(1e-9)
+        assert all(hull.contains(sg.Point(p[0], p[1])) for p in points)
+    with pytest.raises(TaskError, match="wall"):
+        Environment.from_scene(fw.Scene((fw.Plane([0, 0, 0], [1, 0, 0]),)))
+    task_file = tmp_path / "reach.toml"
+    task_file.write_text("""
+[task]
+robot = "youbot_mobile"
+[reach]
+random = 20
+[reach.environment]
+margin = 0.2
+[[obstacles]]
+type = "box"
+center = [0.6, 0.0, 0.3]
+size = [0.3, 0.3, 0.6]
+""")
+    from framework.fabrik.taskfile import run_reach_task
+
+    task = load_task(task_file)
+    assert len(task.environment.obstacles) == 1
+    run = run_reach_task(task)
+    box = sg.Polygon(task.environment.obstacles[0].vertices)
+    assert sum(r.success for r in run.results) >= 15
+    for result in run.results:
+        x, y = result.configuration[:2]
+        assert box.distance(sg.Point(x, y)) >= 0.2 - 1e-6 or not result.success

@@ -22,6 +22,7 @@ import shapely.geometry as sg
 from shapely.ops import unary_union
 
 from ..errors import TaskError
+from ..scene import Scene
 from .regions import AnnulusInBox, BaseReach, PolygonRegion, Region
 
 #: Extra distance [m] kept from the rejection area, so points computed on its border are outside it.
@@ -114,6 +115,16 @@ class Environment:
                 raise TaskError(
                     f"navigable bounds must be ((xmin, xmax), (ymin, ymax)) with min < max; got {self.bounds}"
                 )
+
+    @classmethod
+    def from_scene(cls, scene: Scene, *, margin: float = 0.2,
+                   bounds: tuple[tuple[float, float], tuple[float, float]] | None = None,
+                   obstacles: tuple[Obstacle, ...] = ()) -> Environment:
+        """The floor obstacles of a :class:`~framework.scene.Scene` (the one description the IK terms use): each
+        obstacle's shadow, a convex polygon containing it (a floor plane casts none), beside ``obstacles``."""
+        shadows = [o.footprint() for o in scene]
+        return cls(tuple(obstacles) + tuple(Polygon(tuple(map(tuple, s))) for s in shadows if s is not None),
+                   margin=margin, bounds=bounds)
 
     # ------------------------------------------------------------------ areas
     @cached_property

@@ -46,6 +46,7 @@ import numpy as np
 from ..errors import TaskError
 from ..loading import load_robot
 from ..robot import Robot
+from ..scene import Scene
 from ..taskfile import _trajectory, evaluate
 from .environment import Circle, Environment, Polygon, Rectangle
 from .jacobian import JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
@@ -185,6 +186,10 @@ def reach_task_from_dict(raw: Mapping[str, Any], path: Path, *, points: int | No
     if targets is not None and start is None:
         raise TaskError("[reach] a path needs a start configuration (start = { base = [...], arm = [...] })")
     environment = _environment(reach["environment"]) if "environment" in reach else None
+    if "obstacles" in raw:  # [[obstacles]], as IK task files give them: their shadows on the floor
+        scene = Scene.from_tables(raw["obstacles"], "[[obstacles]]", path.parent)
+        base = environment or Environment()
+        environment = Environment.from_scene(scene, margin=base.margin, bounds=base.bounds, obstacles=base.obstacles)
     return ReachTask(path, str(task.get("name", path.stem)), str(task.get("description", "")), robot, frame,
                      solver, orientation, step, environment, start, targets, random)
 
