@@ -191,7 +191,8 @@ class Robot:
 
     def add_frame(self, name: str, joint_id: int, placement: pin.SE3) -> int:
         """Add an operational frame ``name`` on joint ``joint_id`` at ``placement`` (in the joint frame) to the model,
-        unless it exists; returns its index (derived frames, e.g. the mass points of a centre-of-mass term)."""
+        unless it exists; returns its index (derived frames, e.g. the mass points of a centre-of-mass term, the bodies
+        of a collision term). A ``pinocchio.Data`` made before holds too few frames: make a new one."""
         if name not in self._frame_ids:
             joint_frame = self.model.getFrameId(self.model.names[int(joint_id)]) if joint_id else 0
             self.model.addFrame(pin.Frame(name, int(joint_id), joint_frame, placement, pin.FrameType.OP_FRAME))

@@ -107,7 +107,10 @@ class RobotDrawing:
     def world_frames(self, X: np.ndarray) -> np.ndarray:
         """``(pop, nframes, 4, 4)`` world placement of every frame of the model for ``X`` ``(pop, n)``."""
         X = self.robot.check_population(X)
-        model, data = self.robot.model, self._data
+        model = self.robot.model
+        if len(self._data.oMf) != model.nframes:  # frames added since (Robot.add_frame): Pinocchio sizes Data once
+            self._data = model.createData()
+        data = self._data
         out = np.empty((X.shape[0], model.nframes, 4, 4))
         for k, q in enumerate(self.robot.to_pinocchio(X)):
             pin.framesForwardKinematics(model, data, q)

@@ -359,3 +359,50 @@ size = [0.3, 0.3, 0.6]
     for result in run.results:
         x, y = result.configuration[:2]
         assert box.distance(sg.Point(x, y)) >= 0.2 - 1e-6 or not result.success
+
+
+def test_frames_added_by_a_collision_term_after_a_drawing_was_made():
+    """A drawing made first, a collision term adding its body frames to the model after: the drawing still poses
+    every frame (Pinocchio sizes its Data once; writing past it corrupted memory)."""
+    from framework.viewer import RobotDrawing
+
+    robot = fw.load_robot("youbot_dual")
+    drawing = RobotDrawing(robot)
+    before = robot.model.nframes
+    fw.Problem(robot, fw.SelfCollision(fw.RobotShape(robot))).program  # noqa: B018 - packs: adds frames
+    assert robot.model.nframes > before
+    M = drawing.world_frames(robot.middle)
+    assert M.shape[1] == robot.model.nframes
+    np.testing.assert_allclose(M[0, robot.frame_id("arm1_ee")], robot.frame_placement(robot.middle, "arm1_ee").homogeneous)
+
+
+def test_population_values_equal_a_direct_computation(rng):
+    """The self-collision and obstacle terms' values over a population equal a numpy computation from Pinocchio's
+    sphere centres: per pair of bodies the most negative of (centre distance − radii − margin), summed as
+    |min(0, ·)|; per body and obstacle the same with the box's closed-form signed distance."""
+    robot = fw.load_robot("youbot_dual")
+    shape = fw.RobotShape(robot)
+    cover = shape.cover()
+    margin = 0.01
+    box = fw.Box([0.3, 0.0, 0.35], [0.3, 0.6, 0.1])
+    self_term, obstacle_term = fw.SelfCollision(shape, margin=margin), fw.Obstacles(shape, [box], margin=margin)
+    X = robot.random_configurations(rng, 40)
+    values = fw.Problem(robot, self_term + obstacle_term).values(X)
+    index = {name: [k for k, g in enumerate(cover.geometries) if g == name] for name in set(cover.geometries)}
+    for m, x in enumerate(X):
+        C = cover.world_centers(shape, x)
+        worst: dict[tuple[int, int], float] = {}
+        for a, b in shape.pairs:
+            for i in index[a]:
+                for j in index[b]:
+                    key = tuple(sorted((int(cover.joints[i]), int(cover.joints[j]))))
+                    d = np.linalg.norm(C[i] - C[j]) - cover.radii[i] - cover.radii[j] - margin
+                    worst[key] = min(worst.get(key, np.inf), d)
+        expected_self = sum(-min(0.0, d) for d in worst.values())
+        q = np.abs(C - box.center) - box.size / 2
+        sd = np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0) - cover.radii - margin
+        moving = cover.joints != 0
+        expected_box = sum(-min(0.0, sd[moving & (cover.joints == j)].min()) for j in set(cover.joints[moving]))
+        assert values[m, 0] == pytest.approx(expected_self, abs=1e-12)
+        assert values[m, 1] == pytest.approx(expected_box, abs=1e-12)
+    assert (values[:, 0] > 0).sum() >= 5 and (values[:, 1] > 0).sum() >= 5  # both terms active on some members
