@@ -198,9 +198,9 @@ class RobotShape:
                 pin.computeDistances(self.robot.model, self._data, geometry, data, q)
                 found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
             else:
-                pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
+                any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
                 found = [(k, float(pin.computeDistance(geometry, data, k).min_distance))
-                         for k, r in enumerate(data.collisionResults) if r.isCollision()]
+                         for k, r in enumerate(data.collisionResults) if r.isCollision()] if any_contact else []
             for k, d in found:
                 smallest = min(smallest, d)
                 if (d < margin) if margin > 0 else (d <= -TOUCH or d == 0.0):
