@@ -205,7 +205,7 @@ def tracking() -> list[str]:
 
 def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -> list[str]:
     """µs per call of Problem.cost, without and with the collision terms, at population 30 and 1000 (best of 5)."""
-    lines = ["| robot | sphere pairs / spheres / collision blocks | pop | without µs | with µs | ratio |",
+    lines = ["| robot | geometry pairs checked / spheres / collision rows | pop | without µs | with µs | ratio |",
              "|---|---|---:|---:|---:|---:|"]
     for name, s in setups:
         for pop in (30, 1000):
