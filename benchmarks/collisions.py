@@ -237,7 +237,7 @@ def main() -> None:
     cost_lines = population_costs([("youBot dual mobile", youbot_setup), ("PR2 + table", pr2_setup)], rng)
     after = report.load()
     paragraphs = __doc__.split("\n\n")
-    body = "\n".join([*paragraphs[1:6], "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
+    body = "\n".join(["\n\n".join(paragraphs[1:6]), "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
                       "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
                       "## (c) Tracking paper 000's circle around a table", "", tracking.__doc__, "", *tracking_lines, "",
                       "## Population cost of the collision terms", "", population_costs.__doc__, "", *cost_lines])
