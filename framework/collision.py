@@ -31,7 +31,6 @@ from .robot import Robot
 from .scene import Scene
 from .spheres import SphereCover, sphere_cover
 
-
 #: Penetrations shallower than this [m] are touching, not collisions: coal's GJK / EPA resolve distances between
 #: primitives to about 1e-6 m, so a configuration on a collision term's boundary reads as slightly inside.
 TOUCH = 1e-5

@@ -19,10 +19,10 @@ from typing import Any
 import numpy as np
 
 from .collision import CollisionReport
+from .engine import task_errors
 from .errors import SolverError
 from .problem import Problem
 from .solvers import Request, ik_solver
-from .engine import task_errors
 from .solvers.base import MAX_POPULATION
 from .solvers.ik import positive_int
 

@@ -80,15 +80,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .collision import RobotShape
 from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective,
                     Obstacles, Orientation, Position, RelativePose, RelativePosition, SelfCollision)
-from .collision import RobotShape
 from .errors import MetaikError, TaskError
 from .loading import load_robot
 from .problem import Problem
 from .resources import data_dir
-from .rotations import rotation_from
 from .robot import Robot
+from .rotations import rotation_from
 from .scene import Scene
 from .trajectory import Trajectory, circle, lemniscate, line, paper000, point_count, rose, sinusoid
 from .validate import check_table

@@ -8,7 +8,7 @@ import pytest
 import framework as fw
 from framework.errors import TaskError
 from framework.spheres import SphereCover
-from tests.test_collision import L, R, SPHERES
+from tests.test_collision import SPHERES, L, R
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from framework.engine import residuals
 from framework.errors import TaskError
 from framework.spheres import SphereCover
 from framework.taskfile import load_task, resolve_task
-from tests.test_collision import L, R, SPHERES
+from tests.test_collision import SPHERES, L, R
 
 TURNED = pin.rpy.rpyToMatrix(0.3, -0.5, 1.1)
 SOLIDS = [

@@ -1,5 +1,6 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
+from ..rotations import rotation_from
 from .base import LEVELS, Objective, Term, check_weight
 from .collision import Obstacles, SelfCollision
 from .com import CenterOfMass
@@ -7,7 +8,6 @@ from .direction import Cone, Direction, LookAt
 from .distance import Distance
 from .limits import JointLimitPenalty
 from .motion import JointTarget, Motion
-from ..rotations import rotation_from
 from .orientation import Orientation
 from .pose import Pose, pose_from
 from .position import Position

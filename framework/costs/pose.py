@@ -7,9 +7,9 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..robot import Robot
+from ..rotations import rotation_from
 from . import blocks as B
 from .base import Term, as_vector, finite_rows
-from ..rotations import rotation_from
 from .program import Block
 
 

@@ -26,9 +26,9 @@ from ..viewer import (
 if TYPE_CHECKING:  # pragma: no cover
     from ..collision import RobotShape
     from ..problem import Problem
-    from ..spheres import SphereCover
     from ..robot import Robot
     from ..solve import IKResult
+    from ..spheres import SphereCover
     from ..taskfile import Case, TaskFile
     from ..tracking import TrackingResult
 
