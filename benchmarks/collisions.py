@@ -39,6 +39,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import report  # noqa: E402
+from two_hands import HANDS as PR2_HANDS  # noqa: E402
+from two_hands import pr2 as load_pr2  # noqa: E402
 
 import framework as fw  # noqa: E402
 from framework.taskfile import load_task  # noqa: E402
@@ -46,8 +48,6 @@ from tests.conftest import example_robot_data_dir  # noqa: E402
 
 OUT = report.ROOT / "docs" / "results" / "collisions.md"
 TOLERANCE = 1e-6
-PR2_HANDS = ("l_gripper_tool_frame", "r_gripper_tool_frame")
-PR2_ARM = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex", "wrist_roll")
 TABLE = fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table")
 
 
@@ -125,16 +125,15 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
     lines += ["", f"{len(kept_coll)} random targets kept of {tries} drawn (the others: the sampled configuration "
               "collides, or the unconstrained solve does not). Building a problem with the collision term "
               f"(packing its blocks): median {1e3 * np.median(build):.2f} ms."]
-    stats = {"shape": shape, "robot": robot, "free": problems(*[np.zeros(3)] * 2)[0],
-             "coll": problems(*[np.zeros(3)] * 2)[1], "blocks": len(problems(*[np.zeros(3)] * 2)[1].program.task_blocks),
+    free, coll = problems(np.zeros(3), np.zeros(3))
+    stats = {"shape": shape, "robot": robot, "free": free, "coll": coll, "blocks": len(coll.program.task_blocks),
              "spheres": len(shape.cover().radii), "pairs": len(shape.pairs)}
     return lines, stats
 
 
 def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
     erd = example_robot_data_dir()
-    joints = ["torso_lift_joint"] + [f"{side}_{name}_joint" for side in "lr" for name in PR2_ARM]
-    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    robot = load_pr2()
     shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
     scene = fw.Scene((TABLE,))
     top = TABLE.center[2] + TABLE.size[2] / 2

@@ -327,6 +327,7 @@ class Mesh:
 
 Obstacle = Sphere | Box | Capsule | Plane | Mesh
 KINDS: dict[str, type] = {"sphere": Sphere, "box": Box, "capsule": Capsule, "plane": Plane, "mesh": Mesh}
+KINDS_TUPLE = tuple(KINDS.values())
 
 
 @dataclass(frozen=True)
@@ -367,8 +368,6 @@ class Scene:
             raise TaskError(f"{where} must be a list of tables ([[obstacles]]); got {tables!r}")
         return cls(tuple(_from_table(t, f"{where}[{k}]", folder) for k, t in enumerate(tables)))
 
-
-KINDS_TUPLE = (Sphere, Box, Capsule, Plane, Mesh)
 
 _ROTATION = {"rpy": "list", "quat_xyzw": "list", "quat_wxyz": "list"}
 #: An ``[[obstacles]]`` table by type: its required keys and every key's value kind (:mod:`framework.validate`).

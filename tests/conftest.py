@@ -40,3 +40,16 @@ def same_framework_env(**extra: str) -> dict[str, str]:
     root = str(Path(framework.__file__).resolve().parents[1])
     return {**os.environ, **extra, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
 
+
+
+@pytest.fixture(scope="module")
+def sphere_arm():
+    """``(robot, shape, exact cover)`` of the two-joint arm of ``tests/test_collision.py`` whose base and forearm
+    are spheres: the cover is the geometry itself, so sphere terms and coal agree (the collision tests use it)."""
+    import framework as fw
+    from framework.spheres import SphereCover
+    from tests.test_collision import SPHERES, L, R
+
+    robot = fw.robot_from_urdf(SPHERES)
+    exact = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([R, R]), ("base_0", "fore_0"))
+    return robot, fw.RobotShape(robot), exact

@@ -1,4 +1,4 @@
-"""SelfCollision and SphereObstacles: hinges on sphere distances, against a closed form and coal's exact check."""
+"""SelfCollision and Obstacles: hinges on sphere distances, against a closed form and coal's exact check."""
 
 from __future__ import annotations
 
@@ -7,22 +7,13 @@ import pytest
 
 import framework as fw
 from framework.errors import TaskError
-from framework.spheres import SphereCover
-from tests.test_collision import SPHERES, L, R
+from tests.test_collision import L, R
 
 
-@pytest.fixture(scope="module")
-def arm():
-    robot = fw.robot_from_urdf(SPHERES)
-    shape = fw.RobotShape(robot)
-    exact = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([R, R]), ("base_0", "fore_0"))
-    return robot, shape, exact
-
-
-def test_motion_towards_a_collision_stops_at_the_margin(arm):
+def test_motion_towards_a_collision_stops_at_the_margin(sphere_arm):
     """Motion towards (0, 0) puts the two spheres on each other; kept apart, the optimum splits the angle
     θ* = 2 asin((2R + margin) / 2L) equally between the joints (closed form), found by DE ranked by Deb's rules."""
-    robot, shape, exact = arm
+    robot, shape, exact = sphere_arm
     margin = 0.01
     free = fw.solve(fw.Problem(robot, 1.0 * fw.Motion("all", [0.0, 0.0])), initial=np.array([1.0, 0.5]))
     assert shape.check(free.configuration).colliding
@@ -34,8 +25,8 @@ def test_motion_towards_a_collision_stops_at_the_margin(arm):
     assert not shape.check(result.configuration, margin=margin - 1e-5).colliding
 
 
-def test_the_local_engine_leaves_a_collision(arm):
-    robot, shape, exact = arm
+def test_the_local_engine_leaves_a_collision(sphere_arm):
+    robot, shape, exact = sphere_arm
     start = np.array([0.05, 0.02])
     assert shape.check(start).colliding
     result = fw.solve(fw.Problem(robot, fw.SelfCollision(shape, cover=exact) + 0.1 * fw.Motion("all", start)),
@@ -56,8 +47,8 @@ def test_panda_reaches_targets_without_self_collision(erd):
         assert result.success and not shape.check(result.configuration).colliding
 
 
-def test_sphere_obstacles_are_kept_clear(arm):
-    robot, shape, exact = arm
+def test_sphere_obstacles_are_kept_clear(sphere_arm):
+    robot, shape, exact = sphere_arm
     obstacle = np.array([0.0, L, 0.0])  # on the forearm sphere's circle, at θ1 + θ2 = π/2
     problem = fw.Problem(robot, fw.Obstacles(shape, [fw.Sphere(obstacle, 0.05)], margin=0.01, cover=exact)
                          + fw.Motion("all", [np.pi / 4, np.pi / 4]))

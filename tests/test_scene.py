@@ -80,22 +80,28 @@ def test_signed_distance_gradients_match_differences(obstacle, rng):
         assert np.linalg.norm(g) == pytest.approx(1.0, abs=1e-12)
 
 
+def _hinge_jacobian_matches_differences(robot, program, rng, samples: int) -> int:
+    """Jacobian rows against central differences at random configurations, rows away from the hinge's corner
+    (``|r| > 1e-5``); returns how many rows were compared."""
+    h = 1e-7
+    active = 0
+    for x in robot.random_configurations(rng, samples):
+        r, J = residuals(program, x)
+        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
+                              for e in np.eye(robot.n) * h])
+        rows = np.abs(r) > 1e-5
+        np.testing.assert_allclose(J[rows], fd[rows], atol=1e-5)
+        active += int(rows.sum())
+    return active
+
+
 def test_obstacles_jacobian_matches_differences_on_the_mobile_dual_youbot(rng):
     robot = fw.load_robot("youbot_dual_mobile")
     shape = fw.RobotShape(robot)
     scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.4, 0.8, 0.05]), fw.Capsule([0.0, 0.4, 0.4], 0.05, 0.6, TURNED),
                       fw.Plane([0, 0, 0.02], [0, 0, 1])))
     program = Program(robot, 1.0 * fw.Obstacles(shape, scene, margin=0.05))
-    h = 1e-7
-    active = 0
-    for x in robot.random_configurations(rng, 6):
-        r, J = residuals(program, x)
-        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
-                              for e in np.eye(robot.n) * h])
-        rows = np.abs(r) > 1e-5  # away from the hinge's corner
-        np.testing.assert_allclose(J[rows], fd[rows], atol=1e-5)
-        active += rows.sum()
-    assert active > 10
+    assert _hinge_jacobian_matches_differences(robot, program, rng, 6) > 10
 
 
 def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(rng):
@@ -110,31 +116,14 @@ def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(r
 
     assert kinds == {B.SPHERES, B.SOLIDS}
     program = Program(robot, 1.0 * term)
-    h = 1e-7
-    active = 0
-    for x in robot.random_configurations(rng, 8):
-        r, J = residuals(program, x)
-        fd = np.column_stack([(residuals(program, x + e)[0] - residuals(program, x - e)[0]) / (2 * h)
-                              for e in np.eye(robot.n) * h])
-        rows = np.abs(r) > 1e-5
-        np.testing.assert_allclose(J[rows], fd[rows], atol=1e-5)
-        active += rows.sum()
-    assert active > 10
+    assert _hinge_jacobian_matches_differences(robot, program, rng, 8) > 10
 
 
-@pytest.fixture(scope="module")
-def arm():
-    robot = fw.robot_from_urdf(SPHERES)
-    shape = fw.RobotShape(robot)
-    exact = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([R, R]), ("base_0", "fore_0"))
-    return robot, shape, exact
-
-
-def test_box_obstacle_solve_matches_a_brute_force_grid(arm):
+def test_box_obstacle_solve_matches_a_brute_force_grid(sphere_arm):
     """Motion towards (π/4, π/4) with a box in the way of the forearm sphere: the feasible optimum found by
     the default solver equals the best point of a 601 x 601 grid that keeps the sphere clear (by the box's
     closed-form distance), to the grid's resolution; the unconstrained optimum is infeasible."""
-    robot, shape, exact = arm
+    robot, shape, exact = sphere_arm
     box = fw.Box([0.0, 0.45, 0.0], [0.3, 0.2, 0.3])
     margin = 0.01
     goal = np.array([np.pi / 4, np.pi / 4])
@@ -158,10 +147,10 @@ def test_box_obstacle_solve_matches_a_brute_force_grid(arm):
     assert np.hypot(*(result.configuration - goal)) >= motion[best] - 0.015  # the grid's step is 0.01
 
 
-def test_success_needs_the_exact_check_clear(arm):
+def test_success_needs_the_exact_check_clear(sphere_arm):
     """A cover of tiny spheres keeps its centres apart but not the real links: the sphere term is met, coal
     finds the contact, and the solve is not a success."""
-    robot, shape, _ = arm
+    robot, shape, _ = sphere_arm
     tiny = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([1e-3, 1e-3]),
                        ("base_0", "fore_0"))
     problem = fw.Problem(robot, fw.SelfCollision(shape, cover=tiny) + fw.Motion("all", [0.05, 0.0]))
@@ -206,7 +195,7 @@ def test_scene_tables_and_their_errors(tmp_path):
     assert [o.name for o in same] == ["sphere1", "sphere2"]
 
 
-def test_mesh_obstacle_is_covered_and_checked_exactly(tmp_path, arm):
+def test_mesh_obstacle_is_covered_and_checked_exactly(tmp_path, sphere_arm):
     """A mesh obstacle (a box written as STL): its sphere cover holds its surface, and the exact check finds the
     forearm sphere inside it."""
     import trimesh
@@ -220,14 +209,14 @@ def test_mesh_obstacle_is_covered_and_checked_exactly(tmp_path, arm):
     surface = surface_points(coal.Box(0.2, 0.2, 0.2), 5000, np.random.default_rng(3)) + [0.12, L, 0.0]
     inside = np.min(np.linalg.norm(surface[:, None] - centers[None], axis=2) - radii[None], axis=1)
     assert inside.max() <= 0 and len(radii) <= 8
-    robot, shape, _ = arm
+    robot, shape, _ = sphere_arm
     assert shape.check([np.pi / 4, np.pi / 4], scene=fw.Scene((mesh,)), self_pairs=False).colliding
     assert not shape.check([-np.pi / 4, -np.pi / 4], scene=fw.Scene((mesh,)), self_pairs=False).colliding
 
 
-def test_obstacles_in_a_task_file(tmp_path, arm):
+def test_obstacles_in_a_task_file(tmp_path, sphere_arm):
     """[[obstacles]] and the collision terms from a task file: the same answer as the same problem in code."""
-    robot, shape, _ = arm
+    robot, shape, _ = sphere_arm
     urdf = tmp_path / "spheres.urdf"
     urdf.write_text(SPHERES)
     (tmp_path / "task.toml").write_text(f"""
@@ -267,14 +256,14 @@ type = "obstacles"
         load_task(tmp_path / "bad.toml")
 
 
-def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, arm):
+def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, sphere_arm):
     """Every obstacle kind is a static entity of the recording, at its place; the sphere cover is drawn at the
     solution with its radii."""
     import trimesh
 
     from framework.recording import Recorder, read_recording
 
-    robot, shape, exact = arm
+    robot, shape, exact = sphere_arm
     path = tmp_path / "block.stl"
     trimesh.creation.box(extents=[0.1, 0.1, 0.1]).export(path)
     scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.4, 0.2, 0.1], name="table"), fw.Sphere([0, 0, 1], 0.1),

@@ -253,6 +253,18 @@ def _on_frame(out, f, c0, c1, c2):
             out[f, 6] * c0 + out[f, 7] * c1 + out[f, 8] * c2)
 
 
+@numba.njit(cache=True, inline="always")
+def _hinge_row(value, r, Jr, row, want_jacobian, n) -> bool:
+    """``r[row] = min(0, value)``; whether the caller writes the row's Jacobian (below zero, and wanted). A clear
+    row's Jacobian is zeroed here."""
+    below = value < 0.0
+    r[row] = value if below else 0.0
+    if want_jacobian and not below:
+        for i in range(n):
+            Jr[row, i] = 0.0
+    return want_jacobian and below
+
+
 @numba.njit(cache=True)
 def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -> None:
     """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_k ‖(p_a + R_a c_ak) − (p_b + R_b c_bk)‖ − r_ak
@@ -270,13 +282,7 @@ def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -
         d = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2) - params[q + 3] - params[q + 7]
         if d < best:
             best, arg = d, k
-    below = best - margin < 0.0
-    r[row] = best - margin if below else 0.0
-    if not want_jacobian:
-        return
-    if not below:
-        for i in range(n):
-            Jr[row, i] = 0.0
+    if not _hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
     q = p + 2 + 8 * arg
     a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
@@ -329,13 +335,7 @@ def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g)
             - params[q + 3]
         if d < best:
             best, arg = d, k
-    below = best - margin < 0.0
-    r[row] = best - margin if below else 0.0
-    if not want_jacobian:
-        return
-    if not below:
-        for i in range(n):
-            Jr[row, i] = 0.0
+    if not _hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
     q = p + 18 + 4 * arg
     a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
