@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import RobotFileError
+from .errors import RobotFileError, TaskError
 from .robot import Robot
 from .scene import Scene
 from .spheres import SphereCover, sphere_cover
@@ -185,7 +185,7 @@ class RobotShape:
         ``min_distance`` is then the deepest contact's, or NaN (not measured) when there is none.
         """
         if not distances and margin != 0.0:
-            raise ValueError("the fast check (distances=False) finds contacts at margin 0 only")
+            raise TaskError("the fast check (distances=False) finds contacts at margin 0 only; ask for distances")
         q = self.robot.to_pinocchio(np.asarray(x, dtype=float))
         models = [(self.geometry, self._geometry_data)] if self_pairs else []
         if scene is not None:

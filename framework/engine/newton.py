@@ -128,7 +128,7 @@ def _max_rows(prog) -> int:
 
 @numba.njit(cache=True)
 def _hinge_rows(prog, m):
-    """``(m,)`` True for the task rows of one-sided blocks (distances, cones, clearances: zero when clear)."""
+    """``(m,)`` True for the task rows of one-sided blocks (distances, cones, collision rows: zero when clear)."""
     bint = prog[0]
     hinge = np.zeros(m, dtype=np.bool_)
     row = 0
@@ -227,11 +227,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                                   2.0 * last_step)
             fresh = True
         ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, True)
-        for a in range(m):  # released and clear rows carry no multiplier
-            lam_neg[a] = lam[a]
-            lam[a] = 0.0
-        for a in range(ma):
-            lam[arow[a]] = lam_neg[arow[a]]
+        held_row = 0
+        for a in range(m):  # released and clear rows carry no multiplier (arow is increasing)
+            if held_row < ma and arow[held_row] == a:
+                held_row += 1
+            else:
+                lam[a] = 0.0
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
             s = g[i]
             for a in range(ma):
