@@ -5,7 +5,7 @@ is the one :func:`framework.solve` returns for it (the same configuration, bit f
 binds). The speed comes from where the work runs. A solver whose solve begins with the local engine alone
 (its :meth:`~framework.solvers.ik.IKSolver.batch_plan`: ``hybrid``, ``multistart_lm``) has that beginning run
 for every item in one compiled loop (:mod:`framework.engine.batch`) on every core: the first descent, then for
-the items that stall, the same random restarts ``solve`` would draw from the same seed. The few items still
+the items that stall, the same random restarts ``solve`` draws from the same seed. The few items still
 unsolved (and every item of other solvers) go through ``solve`` itself.
 """
 
@@ -20,8 +20,7 @@ import numpy as np
 
 from .costs.base import Term
 from .engine.batch import BatchState, descend_items, in_chunks
-from .engine.local import RESTART_BATCH
-from .engine.reach import DEADLINE, REACHED, STARTS
+from .engine.reach import DEADLINE, REACHED
 from .errors import SolverError, TaskError
 from .problem import Problem
 from .solve import DEFAULT_SOLVER, DEFAULT_TOLERANCE, make_request, solve
@@ -145,39 +144,15 @@ def solve_batch(
 
 def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan, seeds: np.ndarray,
             time_budget: float | None, workers: int | None, bar: _Bar) -> np.ndarray:
-    """Run the plan's engine phase over every item, as :func:`~framework.engine.solve_local` runs it for one:
-    the first descent, then rounds of restarts drawn from the item's seeded generator while it stalls, the best
-    miss kept. Each thread takes a chunk through all of it (its Python part — the draws — overlaps the other
-    threads' compiled loops). Returns ``(B,)`` which items are finished (the others need the solver itself)."""
-    program, n = problem.program, problem.robot.n
-    lower, upper = problem.robot.lower, problem.robot.upper
+    """Run the plan's engine phase over every item, as :func:`~framework.engine.solve_local` runs it for one (the
+    first descent and, when the plan restarts, the random restarts from the item's seeded stream), on every core.
+    Returns ``(B,)`` which items are finished (the others need the solver itself)."""
+    program = problem.program
     program.refresh()
+    streams = np.array(seeds, dtype=np.uint64)  # one restart stream per item, as ``solve`` makes from the seed
 
     def chunk(items: np.ndarray) -> None:
-        descend_items(program, P, state, items, plan.first, time_budget=time_budget)
-        best = [a[items] for a in state[:3]]  # the best miss so far (solve_local's ``best``), rows of ``items``
-        settings, generators = plan.restarts, {}
-        row = {item: k for k, item in enumerate(items.tolist())}
-        active = items[(state.codes[items] == STARTS) & (state.counts[items, 0] < plan.first.max_iterations)]
-        while settings is not None and active.size:
-            for i in active.tolist():
-                if i not in generators:
-                    generators[i] = np.random.default_rng(int(seeds[i]))
-            draws = np.stack([lower + (upper - lower) * generators[i].random((RESTART_BATCH + 1, n))
-                              for i in active.tolist()])
-            state.X[active] = draws[:, 0]
-            state.counts[active, 2] += 1
-            descend_items(program, P, state, active, settings, starts=draws[:, 1:], time_budget=time_budget)
-            missed = active[state.codes[active] != REACHED]
-            at = np.array([row[i] for i in missed.tolist()], dtype=np.int64)
-            better = np.einsum("ij,ij->i", state.E[missed], state.E[missed]) < np.einsum("ij,ij->i", best[1][at],
-                                                                                          best[1][at])
-            for mine, kept in zip(state[:3], best):
-                kept[at[better]] = mine[missed[better]]
-            active = missed[(state.codes[missed] == STARTS) & (state.counts[missed, 0] < settings.max_iterations)]
-        missed = state.codes[items] != REACHED
-        for mine, kept in zip(state[:3], best):
-            mine[items[missed]] = kept[missed]
+        descend_items(program, P, state, items, plan.first, streams, time_budget=time_budget)
 
     in_chunks(chunk, len(seeds), workers=workers, progress=bar.advance_compiled)
     return (state.codes == REACHED) | (state.codes == DEADLINE) | (not plan.escalates)

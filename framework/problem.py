@@ -66,6 +66,8 @@ class Problem:
             "feasibility"}`` rank by Deb's rules on these levels (the task's tolerances first).
 
     Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
+    ``checks_collisions`` tells whether a term stands for an exact collision check (then success needs
+    :meth:`collisions` clear).
     """
 
     robot: Robot
@@ -85,10 +87,12 @@ class Problem:
             from .costs import JointLimitPenalty
 
             objective = objective + JointLimitPenalty()
+        checks = False
         for _, term in objective:
             term.validate(self.robot)
+            checks = checks or term.checks_collisions
         object.__setattr__(self, "objective", objective)
-        object.__setattr__(self, "_weights", np.array([w for w, _ in objective]))
+        object.__setattr__(self, "checks_collisions", checks)
 
     @cached_property
     def program(self) -> Program:
@@ -101,22 +105,17 @@ class Problem:
 
     @property
     def weights(self) -> np.ndarray:
-        return self._weights.copy()
+        return self.program.weights.copy()
 
     @cached_property
     def task_mask(self) -> np.ndarray:
         """``(k,)`` True for task terms."""
-        return np.array(self.task_list, dtype=bool)
+        return np.array([t.is_task for _, t in self.objective], dtype=bool)
 
-    @cached_property
-    def task_list(self) -> tuple[bool, ...]:
-        """Whether each term is a task term (a tuple, for per-solve bookkeeping without numpy calls)."""
-        return tuple(t.is_task for _, t in self.objective)
-
-    @cached_property
+    @property
     def names(self) -> tuple[str, ...]:
         """Unique labels of the terms, in objective order."""
-        return self.objective.names
+        return self.program.layout.names
 
     @property
     def repair_mode(self) -> str:
@@ -128,10 +127,12 @@ class Problem:
         """``(n,)`` the configuration the regularizers pull towards (e.g. motion terms' ``q_prev``; the box
         middle on coordinates none covers), clipped to the box; ``None`` when no regularizer has one.
         The natural warm start."""
-        x = self.robot.middle.copy()
-        self.program.refresh()
-        if not self.program.reference(x):
+        program = self.program
+        if not program.layout.references:
             return None
+        x = self.robot.middle.copy()
+        program.refresh()
+        program.reference(x)
         return np.clip(x, self.robot.lower, self.robot.upper)
 
     def values(self, X: np.ndarray) -> np.ndarray:
@@ -146,13 +147,8 @@ class Problem:
         """Every term of every member, the cost and the task error."""
         values = self.values(X)
         return Evaluation(
-            self.names, self.weights, values, values @ self._weights, values[:, self.task_mask].sum(axis=1)
+            self.names, self.weights, values, values @ self.program.weights, values[:, self.task_mask].sum(axis=1)
         )
-
-    @cached_property
-    def checks_collisions(self) -> bool:
-        """Whether a term stands for an exact collision check (then success needs :meth:`collisions` clear)."""
-        return any(t.checks_collisions for _, t in self.objective)
 
     def collisions(self, x: np.ndarray) -> CollisionReport | None:
         """The exact collision check of the problem's collision terms at ``x`` ``(n,)``, as one report (coal on

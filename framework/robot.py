@@ -152,6 +152,9 @@ class Robot:
         check_bounds(lower, upper, self.coordinate_names)
         lower.flags.writeable = False
         upper.flags.writeable = False
+        middle = 0.5 * (lower + upper)
+        middle.flags.writeable = False
+        object.__setattr__(self, "_middle", middle)
         for frame in self.end_effectors:
             self.frame_id(frame)
         for name, indices in self.groups.items():
@@ -231,8 +234,8 @@ class Robot:
     # ------------------------------------------------------------------ bounds
     @property
     def middle(self) -> np.ndarray:
-        """Centre of the search box, shape ``(n,)``."""
-        return 0.5 * (self.lower + self.upper)
+        """Centre of the search box, shape ``(n,)`` (read-only, like the bounds: copy it to change it)."""
+        return self._middle
 
     def with_bounds(self, bounds: Mapping[str, tuple[float, float]]) -> Robot:
         """A copy with new search bounds for some coordinates (by coordinate or joint name)."""

@@ -61,6 +61,19 @@ def _rotation_defect(R) -> int:
     return 0 if det > 0 else 2
 
 
+@numba.njit(cache=True)
+def transform_defect(T) -> int:
+    """0 for a homogeneous transform ``(4, 4)`` (finite, a rotation block, last row ``[0, 0, 0, 1]``), 1 for NaN
+    or inf, 2 for a block that is no rotation, 3 for another last row."""
+    for a in range(4):
+        for b in range(4):
+            if not np.isfinite(T[a, b]):
+                return 1
+    if abs(T[3, 0]) > 1e-9 or abs(T[3, 1]) > 1e-9 or abs(T[3, 2]) > 1e-9 or abs(T[3, 3] - 1.0) > 1e-9:
+        return 3
+    return _rotation_defect(T[:3, :3])
+
+
 def rotation_target(target, quat_xyzw, quat_wxyz, what: str) -> np.ndarray:
     """The rotation matrix of exactly one of ``target`` (matrix, or ``(x, y, z, w)``), ``quat_xyzw``, ``quat_wxyz``."""
     given = [v is not None for v in (target, quat_xyzw, quat_wxyz)]

@@ -32,7 +32,7 @@ DEFAULT_SOLVER = "hybrid"
 DEFAULT_TOLERANCE = 1e-6
 
 
-@dataclass(frozen=True)
+@dataclass
 class IKResult:
     """What one IK solve produced.
 
@@ -154,6 +154,7 @@ def make_request(
         initial = problem.robot.check_population(initial, "initial configuration")
     return Request(
         rng=_lazy_generator(seed),
+        seed=int(seed.integers(0, 2**63)) if isinstance(seed, np.random.Generator) else int(seed),
         tolerance=float(tolerance),
         angle_tolerance=float(tolerance if angle_tolerance is None else angle_tolerance),
         max_iterations=max_iterations,
@@ -167,6 +168,8 @@ def make_request(
 
 
 def _positive(value: Any) -> bool:
+    if type(value) is float:  # the common case
+        return 0.0 < value < math.inf
     return isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool) \
         and math.isfinite(value) and value > 0
 
@@ -191,7 +194,10 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     x = np.array(outcome.x, dtype=float)
     program = problem.program
     values = program.values(x[None])[0] if outcome.values is None else outcome.values
-    cost = float(values @ problem._weights)
+    value_list = values.tolist()
+    cost = 0.0
+    for w, v in zip(program.weight_list, value_list):
+        cost += w * v
     errors = outcome.task_errors
     if errors is None:
         errors = task_errors(program, x)
@@ -201,12 +207,12 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
                                                                        request.angle_tolerance)
     collisions = problem.collisions(x)
     success = success and (collisions is None or not collisions.colliding)
-    value_list = values.tolist()
+    layout = program.layout
     return IKResult(
         configuration=x,
         cost=cost,
-        terms=dict(zip(problem.names, value_list)),
-        task_error=sum(v for v, task in zip(value_list, problem.task_list) if task),
+        terms=dict(zip(layout.names, value_list)),
+        task_error=sum([value_list[k] for k in layout.task_terms]),
         success=success,
         stop_reason=outcome.stop_reason,
         iterations=int(outcome.iterations),

@@ -139,11 +139,14 @@ class Term:
 
 
 def check_weight(weight: float) -> float:
+    """``weight`` as a float; raises :class:`TaskError` unless it is a finite number >= 0."""
+    if type(weight) is float and 0.0 <= weight < math.inf:  # the common case, without a conversion
+        return weight
     try:
         w = float(weight)
     except (TypeError, ValueError):
         raise TaskError(f"a cost weight must be a finite number >= 0; got {weight!r}") from None
-    if not np.isfinite(w) or w < 0:
+    if not math.isfinite(w) or w < 0:
         raise TaskError(f"a cost weight must be a finite number >= 0; got {weight!r}")
     return w
 
@@ -201,16 +204,21 @@ class Objective:
     @property
     def names(self) -> tuple[str, ...]:
         """Unique labels of the terms (a repeated name gets ``#2``, ``#3``, ...)."""
-        seen: dict[str, int] = {}
-        out = []
-        for _, term in self.terms:
-            seen[term.name] = seen.get(term.name, 0) + 1
-            out.append(term.name if seen[term.name] == 1 else f"{term.name}#{seen[term.name]}")
-        return tuple(out)
+        return unique_labels(term.name for _, term in self.terms)
 
     @property
     def frames(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(f for _, t in self.terms for f in t.frames))
+
+
+def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
+    """``names`` made unique in order: a repeated name gets ``#2``, ``#3``, ..."""
+    seen: dict[str, int] = {}
+    out = []
+    for name in names:
+        seen[name] = seen.get(name, 0) + 1
+        out.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
+    return tuple(out)
 
 
 def finite_rows(values, shape: tuple[int, ...], what: str) -> np.ndarray:

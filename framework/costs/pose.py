@@ -7,7 +7,7 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..robot import Robot
-from ..rotations import rotation_from
+from ..rotations import rotation_from, transform_defect
 from . import blocks as B
 from .base import Term, as_vector, finite_rows
 from .program import Block
@@ -16,20 +16,26 @@ from .program import Block
 def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
     """``(position (3,), rotation (3, 3))`` of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
     ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated."""
-    if isinstance(target, pin.SE3):
-        return as_vector(target.translation, 3, lambda: f"{what} position"), rotation_from(target.rotation, what)
     if isinstance(target, tuple) and len(target) == 2:
         return as_vector(target[0], 3, f"{what} position"), rotation_from(target[1], what)
-    try:
-        T = np.array(target, dtype=float)
-    except (TypeError, ValueError):
-        raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair") from None
-    if T.shape != (4, 4):
-        raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair; "
-                        f"got shape {T.shape}")
-    if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0]):
+    if isinstance(target, pin.SE3):
+        T = target.homogeneous  # a new array
+    else:
+        try:
+            T = np.array(target, dtype=float)
+        except (TypeError, ValueError):
+            raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair") from None
+        if T.shape != (4, 4):
+            raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair; "
+                            f"got shape {T.shape}")
+    defect = transform_defect(T)
+    if defect == 1:
+        raise TaskError(f"{what} holds NaN or inf: {T.tolist()}")
+    if defect == 2:
+        raise TaskError(f"{what} is not a rotation matrix (RᵀR ≠ I or det < 0)")
+    if defect == 3:
         raise TaskError(f"{what}: the last row of a homogeneous matrix must be [0, 0, 0, 1]; got {T[3].tolist()}")
-    return as_vector(T[:3, 3], 3, f"{what} position"), rotation_from(T[:3, :3], what)
+    return T[:3, 3].copy(), T[:3, :3].copy()
 
 
 class Pose(Term):

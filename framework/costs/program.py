@@ -9,6 +9,7 @@ Terms without blocks (user terms written in numpy) are evaluated by their own ``
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from ..errors import ConfigurationError, TaskError
 from ..robot import JointKind, Robot
 from . import blocks as B
+from .base import unique_labels
 from .kernels import population_cost, population_values
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -132,6 +134,8 @@ class _Layout:
                 suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
                 names.append(term.name + (suffix if len(blocks) > 1 else ""))
         self.task_blocks = tuple(names)
+        self.names = unique_labels(t.name for t in terms)  # the problem's term labels
+        self.task_terms = tuple(k for k, level in enumerate(levels) if level == B.LEVEL_TASK)
         self._bflt: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_rows = int(self.task_block_rows.sum())
@@ -162,9 +166,8 @@ class Program:
 
     def __init__(self, robot: Robot, objective: Objective):
         self.robot = robot
-        self.terms: tuple[Term, ...] = tuple(t for _, t in objective)
-        weights = tuple(float(w) for w, _ in objective)
-        self.weights = np.array(weights)
+        self.terms: tuple[Term, ...] = tuple([t for _, t in objective])
+        weights = self.weight_list = tuple([w for w, _ in objective])  # floats (``Objective`` checked them)
         packed = [t.packed(robot) for t in self.terms]
         key = ("layout", tuple((t.level, t.name, signature) for t, (_, signature) in zip(self.terms, packed)))
         layout = robot._cache.get(key)
@@ -181,6 +184,11 @@ class Program:
         self.term_kinds = layout.term_kinds
         self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
         self._versions = [t.version for t in self.terms]
+
+    @cached_property
+    def weights(self) -> np.ndarray:
+        """``(terms,)`` the terms' weights."""
+        return np.array(self.weight_list)
 
     def named_errors(self, errors: Sequence[float]) -> dict[str, float]:
         """Task block errors (block order) by name; blocks sharing a name (a collision term's hundreds of sphere

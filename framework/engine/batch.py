@@ -2,7 +2,7 @@
 
 :func:`descend` runs, for each item in turn, exactly what :func:`~framework.engine.local.solve_local` runs
 for one problem: the item's parameters (its targets) are written into the program, :func:`~.reach.reach`
-drives the task from the item's start (through its restart configurations, if it has any) and, when the task
+drives the task from the item's start (restarting from draws of the item's stream, if restarts are on) and, when the task
 is reached, :func:`~.newton.regularize` minimizes the regularizers on it. The loop releases the GIL, so
 threads run chunks of a batch on all cores, each with its own copy of the program's parameters.
 
@@ -22,7 +22,7 @@ import numpy as np
 from ..costs.program import Program
 from . import newton
 from .clock import monotonic_ns
-from .local import LocalSettings, search_box
+from .local import RESTARTS, LocalSettings, search_box
 from .reach import REACHED, reach
 
 #: Items per compiled call at most (the unit of work a thread takes, and of progress reports).
@@ -30,15 +30,16 @@ CHUNK = 256
 
 
 @numba.njit(cache=True, nogil=True)
-def descend(items, X, starts, P, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations,
-            stall, budget_ns, polish, regularize, regularize_iterations, smoothing, task_rows, E, V, codes, counts,
-            spent_ns) -> None:
+def descend(items, X, restarts, streams, P, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
+            max_iterations, stall, budget_ns, polish, regularize, regularize_iterations, smoothing, task_rows, E, V,
+            codes, counts, spent_ns) -> None:
     """Solve the items ``items`` of a batch in place, one after the other.
 
     Args:
         items: ``int64 (k,)`` item indices.
         X: ``(B, n)`` starts; on return each solved item's configuration.
-        starts: ``(k, S, n)`` restart configurations of each listed item (``S = 0``: none).
+        restarts: random restarts allowed per item; streams: ``uint64 (B,)`` each item's restart stream
+            (:mod:`~framework.engine.draws`), advanced.
         P: ``(B, p)`` each item's program parameters (written into ``prog[2]`` before its solve).
         max_iterations: ``int64 (B,)`` Levenberg-Marquardt iterations left per item.
         budget_ns: ``int64 (B,)`` nanoseconds left per item (``<= 0`` in the first entry: no budget).
@@ -56,8 +57,8 @@ def descend(items, X, starts, P, lower, upper, box_wrap, kin, prog, tol_linear, 
         begin = monotonic_ns()
         deadline = begin + budget_ns[i] if budget_ns[i] > 0 else 0
         x = X[i]
-        code = reach(x, starts[t], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations[i],
-                     stall, deadline, polish, E[i], V[i], stats)
+        code = reach(x, restarts, streams[i : i + 1], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
+                     max_iterations[i], stall, deadline, polish, E[i], V[i], stats)
         counts[i, 0] += stats[0]
         counts[i, 1] += stats[1]
         counts[i, 2] += stats[2]
@@ -89,11 +90,11 @@ class BatchState(NamedTuple):
 
 
 def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-                  *, starts: np.ndarray | None = None, time_budget: float | None = None) -> None:
+                  streams: np.ndarray, *, time_budget: float | None = None) -> None:
     """Run :func:`descend` over ``items`` in this thread, with its own copy of the program's parameters.
 
-    ``starts`` ``(len(items), S, n)``: each item's restart configurations (default none); ``time_budget``: seconds
-    per item, counted from its first descent. Threads may run it at once on disjoint items.
+    ``streams`` ``uint64 (B,)``: each item's restart stream (used when ``settings.restarts``); ``time_budget``:
+    seconds per item, counted from its first descent. Threads may run it at once on disjoint items.
     """
     lower, upper, box_wrap = search_box(program)
     items = np.ascontiguousarray(items, dtype=np.int64)
@@ -104,9 +105,8 @@ def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
     prog = list(program.prog)
     prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    if starts is None:
-        starts = np.zeros((len(items), 0, program.robot.n))
-    descend(items, state.X, np.ascontiguousarray(starts), P, lower, upper, box_wrap, program.kin, tuple(prog),
+    descend(items, state.X, RESTARTS if settings.restarts else 0, streams, P, lower, upper, box_wrap, program.kin,
+            tuple(prog),
             settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish,
             bool(settings.regularize and program.has_regularizers), settings.regularize_iterations,
             settings.smoothing, program.task_rows, state.E, state.V, state.codes, state.counts, state.spent_ns)

@@ -3,16 +3,15 @@
 :func:`solve_local` is the one local solver of the framework. It reaches the task (level-1 terms) by
 Levenberg-Marquardt with random restarts (:mod:`~framework.engine.reach`), then, when the problem has
 regularizers (level-2 terms, e.g. motion), minimizes them without leaving the task
-(:func:`~framework.engine.newton.regularize`). Everything runs in compiled code; this module only draws the
-restart configurations from the caller's generator, converts the time budget into a deadline, and names the
-outcome. :func:`residuals` gives the stacked residuals and Jacobians at one configuration (for predictors,
+(:func:`~framework.engine.newton.regularize`). Everything runs in compiled code, the random restarts included
+(drawn from a seeded stream, :mod:`~framework.engine.draws`); this module converts the time budget into a
+deadline and names the outcome. :func:`residuals` gives the stacked residuals and Jacobians at one configuration (for predictors,
 task covariances and tests).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -23,10 +22,11 @@ from ..costs.kernels import residuals_at, task_errors_at
 from ..costs.program import Program
 from ..errors import SolverError
 from . import newton
+from .draws import stream
 from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
 
-#: Restart configurations drawn per call of the compiled loop (more are drawn while the budget lasts).
-RESTART_BATCH = 32
+#: Restarts of a descent that may restart: as many as its iteration and time budgets allow.
+RESTARTS = 2**62
 _REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
                       newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
 
@@ -118,7 +118,7 @@ def _nanoseconds(deadline: float | None) -> int:
 def solve_local(
     program: Program,
     x0: np.ndarray,
-    rng: np.random.Generator | Callable[[], np.random.Generator],
+    rng: int | np.ndarray | np.random.Generator,
     settings: LocalSettings = LocalSettings(),
     *,
     deadline: float | None = None,
@@ -128,8 +128,8 @@ def solve_local(
     Args:
         program: the packed problem (:attr:`framework.problem.Problem.program`).
         x0: ``(n,)`` first start (float64).
-        rng: draws the restart configurations (a callable returning the generator is called only when a
-            restart is needed).
+        rng: the restart configurations' stream (:func:`~framework.engine.draws.stream`, advanced in place, so
+            successive calls draw new configurations), or a seed to make one from.
         settings: tolerances, budgets and phases.
         deadline: ``time.monotonic()`` at which to stop (overrides ``settings.time_budget``).
     """
@@ -139,31 +139,15 @@ def solve_local(
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
     deadline_ns = _nanoseconds(deadline)
-    stats = np.empty(3, dtype=np.int64)
+    stats = np.zeros(3, dtype=np.int64)
     errors = np.empty(program.task_block_rows.size)
     values = np.zeros(len(program.terms))
-    iterations = evaluations = restarts = 0
     code = REACHED
     if program.task_rows:
-        best, best_errors = x, None
-        starts = program.layout.no_starts  # the first descent needs no random numbers: drawn when it stalls
-        while True:
-            code = reach(x, starts, lower, upper, box_wrap, program.kin, program.prog, settings.tolerance,
-                         settings.angular, settings.max_iterations - iterations, settings.stall, deadline_ns,
-                         settings.polish, errors, values, stats)
-            iterations, evaluations, restarts = iterations + stats[0], evaluations + stats[1], restarts + stats[2]
-            if code == REACHED:
-                best, best_errors, best_values = x, errors, values
-                break
-            if best_errors is None or errors @ errors < best_errors @ best_errors:
-                best, best_errors, best_values = x.copy(), errors.copy(), values.copy()
-            if code != STARTS or iterations >= settings.max_iterations or not settings.restarts:
-                break
-            generator = rng() if callable(rng) else rng
-            batch = lower + (upper - lower) * generator.random((RESTART_BATCH + 1, x.size))
-            x, starts = batch[0].copy(), batch[1:].copy()
-            restarts += 1
-        x, errors, values = best, best_errors, best_values
+        code = reach(x, RESTARTS if settings.restarts else 0, rng if isinstance(rng, np.ndarray) else stream(rng),
+                     lower, upper, box_wrap, program.kin, program.prog, settings.tolerance, settings.angular,
+                     settings.max_iterations, settings.stall, deadline_ns, settings.polish, errors, values, stats)
+    iterations, evaluations, restarts = stats.tolist()
     reached = code == REACHED
     regularized = multipliers = None
     if reached and settings.regularize and program.has_regularizers:
@@ -175,8 +159,8 @@ def solve_local(
     status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
     if not program.task_rows and not regularized:  # nothing ran: the values at the start
         values = program.values(x[None])[0]
-    return LocalResult(x, bool(reached), status, errors, int(iterations), int(evaluations), int(restarts),
-                       regularized, multipliers, values if not program.layout.generic else None)
+    return LocalResult(x, bool(reached), status, errors, iterations, evaluations, restarts, regularized,
+                       multipliers, values if not program.layout.generic else None)
 
 
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}

@@ -5,10 +5,10 @@ step ``dx = −(JᵀJ + λI)⁻¹Jᵀr`` with ``λ = μ‖r‖²`` (damping that
 are Gauss-Newton's quadratic ones), ``μ`` ÷4 after a step that lowers ``‖r‖`` and ×4 after one that does not.
 Steps stay in the search box: a coordinate held at a bound that the step pushes outward is taken out of the
 step (its Jacobian column zeroed, the step solved again), the rest is clipped, and continuous joints wrap
-around. A start whose ``‖r‖²`` has not dropped by 10 % in ``stall`` iterations is abandoned for the next of the
-given random configurations. Every task block is held to its own tolerance (metres for positions, radians for
-orientations), and the clock is read at every iteration, so a time budget is kept to within one iteration
-(a few µs). Constants tuned on 300 FK-sampled poses per arm (UR5, Panda, Baxter; see benchmarks/pose_ik.py).
+around. A start whose ``‖r‖²`` has not dropped by 10 % in ``stall`` iterations is abandoned for a configuration
+drawn uniformly in the box from a seeded stream (:mod:`~framework.engine.draws`), inside the loop. Every task
+block is held to its own tolerance (metres for positions, radians for orientations), and the clock is read at
+every iteration, so a time budget is kept to within one iteration (a few µs). Constants tuned on 300 FK-sampled poses per arm (UR5, Panda, Baxter; see benchmarks/pose_ik.py).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
+from .draws import uniform_in_box
 from .linalg import least_norm_step, levenberg_marquardt_step
 
 #: Status codes of :func:`reach`.
@@ -88,13 +89,14 @@ def squared_norm(r, m) -> float:
 
 
 @numba.njit(cache=True)
-def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations, stall,
+def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations, stall,
           deadline_ns, polish, errors, values, stats) -> int:
-    """Drive every task block within tolerance from ``x (n,)``, then from ``starts[0]``, ``starts[1]``, ...
+    """Drive every task block within tolerance from ``x (n,)``, then from random configurations in the box.
 
     Args:
         x: first start; on return the configuration reached, or the best one seen (smallest ``‖r‖``).
-        starts: ``(S, n)`` restart configurations, used in order.
+        restarts: how many times a stalled descent may restart from a configuration drawn from ``rng`` (the
+            stream ``uint64 (1,)`` of :mod:`~framework.engine.draws`, advanced).
         tol_linear, tol_angular: tolerances of position-like [m] and orientation [rad] blocks.
         max_iterations: Levenberg-Marquardt iterations in all; ``stall``: iterations without progress before
             a restart; ``deadline_ns``: ``monotonic_ns()`` at which to stop (0: none).
@@ -104,11 +106,11 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
         stats: ``int64 (3,)`` out: iterations, residual evaluations, restarts.
 
     Returns:
-        ``REACHED``, ``ITERATIONS``, ``DEADLINE`` or ``STARTS`` (restarts used up).
+        ``REACHED``, ``ITERATIONS``, ``DEADLINE`` or ``STARTS`` (stalled with the restarts used up).
     """
     n = x.shape[0]
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    x, starts, lower, upper, box_wrap = borrow(x), borrow(starts), borrow(lower), borrow(upper), borrow(box_wrap)
+    x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     own_ws, own_trial = workspace(kin, prog, n), workspace(kin, prog, n)
     ws, trial = borrow_ws(own_ws), borrow_ws(own_trial)
     project(x, lower, upper, box_wrap)
@@ -127,7 +129,7 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
     e = squared_norm(ws[3], m)
     best_e = e
     damping, checkpoint, since = DAMPING_START, e, 0
-    iterations, evaluations, restarts, next_start = 0, 1, 0, 0
+    iterations, evaluations, restarted = 0, 1, 0
     status = ITERATIONS
     while True:
         task_errors(prog, ws[3], errors)
@@ -165,12 +167,11 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
         else:
             since += 1
         if since >= stall or damping > DAMPING_MAX:
-            if next_start >= starts.shape[0]:
+            if restarted >= restarts:
                 status = STARTS
                 break
-            x[:] = starts[next_start]
-            next_start += 1
-            restarts += 1
+            uniform_in_box(rng, lower, upper, x)
+            restarted += 1
             project(x, lower, upper, box_wrap)
             linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
             evaluations += 1
@@ -200,6 +201,6 @@ def reach(x, starts, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
         linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
         task_errors(prog, ws[3], errors)
     term_values(x, prog, ws, values)
-    stats[0], stats[1], stats[2] = iterations, evaluations, restarts
+    stats[0], stats[1], stats[2] = iterations, evaluations, restarted
     keep_alive(own_ws, own_trial, own)
     return status

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
 from .metaheuristic import compiled_or_loop, shared_loop, within
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
@@ -88,8 +89,8 @@ class Hybrid(IKSolver):
         x0, start = start_configuration(problem, request, o.warm_start)
         settings = local_settings(request, o, default_iterations(request))
         if start == "middle" or not o.restarts:
-            return BatchPlan(x0, settings, settings if o.restarts else None)
-        return BatchPlan(x0, _in_basin(settings), None)
+            return BatchPlan(x0, settings)
+        return BatchPlan(x0, _in_basin(settings))
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options
@@ -97,12 +98,13 @@ class Hybrid(IKSolver):
         budget = default_iterations(request)
         settings = local_settings(request, o, budget)
         counter = _Counter(problem, request)
+        draws = stream(request.seed)  # the engine's restarts, one stream through every phase
         iterations = evaluations = restarts = 0
         history: list[float] = []
 
         def engine(x: np.ndarray, settings: LocalSettings = settings):
             nonlocal iterations, evaluations, restarts
-            result = solve_local(problem.program, x, request.rng, settings, deadline=request.deadline)
+            result = solve_local(problem.program, x, draws, settings, deadline=request.deadline)
             iterations, evaluations = iterations + result.iterations, evaluations + result.evaluations
             restarts += result.restarts
             counter.report(result.x)

@@ -33,6 +33,7 @@ class Request(NamedTuple):
 
     Attributes:
         rng: the generator (created on first use, so solves that need no randomness do not pay for it).
+        seed: the integer the local engine's restart stream starts from (:func:`~framework.engine.draws.stream`).
         tolerance: every position-like task term within this [m]; angle_tolerance: orientations [rad].
         max_iterations: the solver's iteration budget (``None``: its own default).
         population: candidates per iteration (metaheuristics; the hybrid's global phase).
@@ -44,6 +45,7 @@ class Request(NamedTuple):
     """
 
     rng: Callable[[], np.random.Generator]
+    seed: int
     tolerance: float
     angle_tolerance: float
     max_iterations: int | None = None
@@ -76,14 +78,13 @@ class Outcome(NamedTuple):
 
 class BatchPlan(NamedTuple):
     """How a solve begins when its beginning is the local engine alone, so :func:`framework.solve_batch` can run
-    it compiled over a whole batch: the first start ``x0 (n,)``, the settings of the first descent (from ``x0``,
-    no random restart), those of the random restarts that follow it (``None``: none follow), and whether the
-    solver goes on when the engine misses the task (``escalates``: such items are solved by the solver itself;
-    otherwise the engine's best miss is the answer)."""
+    it compiled over a whole batch: the first start ``x0 (n,)``, the settings of the descent from it (with the
+    random restarts that follow it when ``first.restarts``), and whether the solver goes on when the engine misses
+    the task (``escalates``: such items are solved by the solver itself; otherwise the engine's best miss is the
+    answer)."""
 
     x0: np.ndarray
     first: LocalSettings
-    restarts: LocalSettings | None
     escalates: bool = True
 
 
@@ -152,6 +153,8 @@ def parse_options(options_type: type, options: Mapping[str, Any] | None, solver:
 
 def positive_int(value: Any, what: str, *, minimum: int = 1, maximum: int | None = None) -> int:
     """``value`` as an int in ``[minimum, maximum]``; raises :class:`SolverError` naming ``what``."""
+    if type(value) is int and value >= minimum and (maximum is None or value <= maximum):  # the common case
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
             or not np.isfinite(value) or value != int(value) or int(value) < minimum:
         raise SolverError(f"{what} must be an integer >= {minimum}; got {value!r}")

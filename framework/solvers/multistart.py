@@ -94,12 +94,12 @@ class MultistartLM(IKSolver):
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, _ = start_configuration(problem, request, self.options.warm_start)
         settings = local_settings(request, self.options, default_iterations(request))
-        return BatchPlan(x0, settings, settings if self.options.restarts else None, escalates=False)
+        return BatchPlan(x0, settings, escalates=False)
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
         iterations = default_iterations(request)
-        result = solve_local(problem.program, x0, request.rng, local_settings(request, self.options, iterations),
+        result = solve_local(problem.program, x0, request.seed, local_settings(request, self.options, iterations),
                              deadline=request.deadline)
         if request.callback is not None:
             request.callback(1, float(problem.cost(result.x)[0]), result.x.copy())

@@ -35,6 +35,6 @@ def predictor(problem: Problem, x: np.ndarray) -> np.ndarray:
     ``x`` itself when the problem has no task term."""
     if not problem.program.task_rows:
         return np.array(x, dtype=float)
-    return solve_local(problem.program, x, np.random.default_rng(0), PREDICTOR).x.copy()
+    return solve_local(problem.program, x, 0, PREDICTOR).x.copy()
 
 
