@@ -29,6 +29,13 @@ def borrow(a):
 
 
 @numba.njit(cache=True, inline="always")
+def square(buffer, k):
+    """A ``(k, k)`` C-contiguous view (without an owner) of the first ``k²`` entries of the flat ``buffer`` (a
+    ``reshape`` would call into numba's runtime on every use; a ``[:k, :k]`` slice would be strided)."""
+    return numba.carray(_address_as_pointer(buffer.ctypes.data), (k, k), buffer.dtype)
+
+
+@numba.njit(cache=True, inline="always")
 def borrow_kin(kin):
     """:func:`borrow` over the kinematic tables ``(jint, jgeo, fslot, fgeo)``."""
     return borrow(kin[0]), borrow(kin[1]), borrow(kin[2]), borrow(kin[3])

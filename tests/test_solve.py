@@ -214,3 +214,15 @@ def test_feasibility_ranking_reaches_what_the_weighted_sum_trades_away(solver):
     assert runs["feasibility"].terms["motion[all]"] < np.linalg.norm(x_goal - arm.middle)
     with pytest.raises(fw.SolverError, match="ranking"):
         fw.solve(problem, solver, options={"ranking": "lexical"})
+
+
+def test_hybrid_passes_its_global_options_to_the_global_phase():
+    """Options of the global solver are a table inside the hybrid's options (they used to crash the settings
+    cache, which hashed the hybrid's options whole)."""
+    robot = fw.load_robot("puma560")
+    target = robot.frame_placement(robot.middle + 0.4, "ee")
+    problem = Problem(robot, fw.Pose("ee", target))
+    result = solve(problem, "hybrid", seed=1, options={"global_iterations": 3, "global_options": {"sigma0": 0.05}})
+    assert result.success and result.settings["escalated"] is False
+    with pytest.raises(fw.SolverError, match="sigma_zero"):  # the table reaches the global solver, which checks it
+        solve(problem, "hybrid", seed=1, options={"global_iterations": 3, "global_options": {"sigma_zero": 0.05}})

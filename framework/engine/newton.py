@@ -97,7 +97,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
 @numba.njit(cache=True)
 def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target) -> float:
     """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
-    the step would push through are left out of it); returns the final ``‖r‖``."""
+    the step would push through are left out of it; ``A, L`` flat scratch); returns the final ``‖r‖``."""
     n = x.shape[0]
     e = np.sqrt(squared_norm(ws[3], m))
     for _ in range(steps):
@@ -306,7 +306,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 xt[i] = x[i] + alpha * dx[i]
             project(xt, lower, upper, box_wrap)
             linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
-            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, feasible)
+            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym,
+                         dxm, Jc, RESTORE_STEPS, feasible)
             linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
             evaluations += 1
             Gt = level_value(REGULARIZERS, prog, tri_r[3], YES)
@@ -341,7 +342,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if mu > MU_MAX or trust < 1e-12:
                 status = STALLED
                 break
-    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am, Lm, ym, dxm, Jc, RESTORE_STEPS, 0.0)  # to the last bit
+    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym, dxm, Jc,
+             RESTORE_STEPS, 0.0)  # to the last bit
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                           0.0)

@@ -17,7 +17,7 @@ import numba
 import numpy as np
 
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, task_errors, term_values, within_tolerance, workspace
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
 from .linalg import least_norm_step, levenberg_marquardt_step
@@ -28,6 +28,8 @@ REACHED, ITERATIONS, DEADLINE, STARTS = 0, 1, 2, 3
 DAMPING_START, DAMPING_MIN, DAMPING_MAX, DAMPING_UP, DAMPING_DOWN = 0.1, 1e-12, 1e8, 4.0, 0.25
 #: A start progresses while ``‖r‖²`` drops below this fraction of its last checkpoint within ``stall`` steps.
 PROGRESS = 0.9
+#: ``‖r‖²`` at which polishing stops: ``‖r‖ <= 1e-15``, machine precision for residuals of order one.
+POLISHED = 1e-30
 
 
 @numba.njit(cache=True)
@@ -45,12 +47,15 @@ def project(x, lower, upper, box_wrap):
 @numba.njit(cache=True)
 def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     """The Levenberg-Marquardt step ``dx = −(JᵀJ + λI)⁻¹Jᵀr = −Jᵀ(JJᵀ + λI)⁻¹r``, in the smaller of the two
-    systems (``A, L`` are at least ``(k, k)`` with ``k = min(m, n)``, ``y (k,)``; their leading block is used)."""
+    systems (``A, L`` flat buffers of at least ``k²`` with ``k = min(m, n)``, ``y`` at least ``max(m, n)``; their
+    leading parts are used, as contiguous ``(k, k)`` matrices: with ``[:k, :k]`` slices, strided, the step cost
+    a third more)."""
     m, n = Jr.shape
     k = min(m, n)
+    Ak, Lk = square(A, k), square(L, k)
     if m < n:
-        return least_norm_step(Jr, r, damping, A[:k, :k], L[:k, :k], y[:k], dx)
-    return levenberg_marquardt_step(Jr, r, damping, A[:k, :k], L[:k, :k], y[:k], dx)
+        return least_norm_step(Jr, r, damping, Ak, Lk, y[:k], dx)
+    return levenberg_marquardt_step(Jr, r, damping, Ak, Lk, y[:k], dx)
 
 
 @numba.njit(cache=True)
@@ -118,8 +123,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     k = min(m, n)
     own = np.empty(2 * k * k + max(k, n) + 3 * n + m * n)  # one allocation, carved into the scratch arrays
     scratch = borrow(own)
-    A = scratch[: k * k].reshape((k, k))
-    L = scratch[k * k : 2 * k * k].reshape((k, k))
+    A, L = scratch[: k * k], scratch[k * k : 2 * k * k]  # flat: damped_step shapes them
     a = 2 * k * k
     y = scratch[a : a + max(k, n)]
     a += max(k, n)
@@ -182,16 +186,19 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             damping, checkpoint, since = DAMPING_START, e, 0
     if status == REACHED:
         for _ in range(polish):  # quadratic convergence: one or two steps take it to machine precision
+            if e <= POLISHED:
+                break
             if not bounded_step(x, ws[4][:m], ws[3][:m], DAMPING_MIN * e, lower, upper, box_wrap, Jc, A, L, y, dx):
                 break
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, TASK, kin, prog, trial, YES, COMPUTE)
+            linearize(xt, TASK, kin, prog, trial, NO, COMPUTE)
             evaluations += 1
             et = squared_norm(trial[3], m)
             if not et < e:
                 break
+            linearize(xt, TASK, kin, prog, trial, YES, JACOBIANS_FROM_POSES)
             ws, trial = trial, ws
             x[:] = xt
             e = et

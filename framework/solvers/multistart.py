@@ -62,7 +62,8 @@ def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np
 
 def local_settings(request: Request, options, max_iterations: int) -> LocalSettings:
     """The engine settings of a request (memoized: a solve should not pay for building them)."""
-    key = (request.tolerance, request.angle_tolerance, max_iterations, options)
+    key = (request.tolerance, request.angle_tolerance, max_iterations, options.stall, options.restarts,
+           options.polish, options.regularize)  # what the settings read (options may hold unhashable tables)
     cached = _SETTINGS.get(key)
     if cached is None:
         if len(_SETTINGS) > 256:
