@@ -9,7 +9,7 @@ collision terms) when there are any.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -66,6 +66,7 @@ class Problem:
             "feasibility"}`` rank by Deb's rules on these levels (the task's tolerances first).
 
     Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
+    ``program`` is the objective packed for the compiled kernels and the local engine (built with the problem);
     ``checks_collisions`` tells whether a term stands for an exact collision check (then success needs
     :meth:`collisions` clear).
     """
@@ -74,6 +75,8 @@ class Problem:
     objective: Objective
     bounds: str = "resample"
     priorities: bool = True
+    program: Program = field(init=False, repr=False)
+    checks_collisions: bool = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         objective = Objective.of(self.objective)
@@ -93,11 +96,7 @@ class Problem:
             checks = checks or term.checks_collisions
         object.__setattr__(self, "objective", objective)
         object.__setattr__(self, "checks_collisions", checks)
-
-    @cached_property
-    def program(self) -> Program:
-        """The objective packed for the compiled kernels and the local engine (built once)."""
-        return Program(self.robot, self.objective)
+        object.__setattr__(self, "program", Program(self.robot, objective))
 
     @property
     def n(self) -> int:

@@ -201,7 +201,10 @@ class Program:
     def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float) -> bool:
         """Whether every task block's error (block order, from :func:`framework.engine.task_errors`) is within
         ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others."""
-        return all(e <= (angle_tolerance if a else tolerance) for e, a in zip(errors, self.task_angular))
+        for e, angular in zip(errors, self.task_angular):
+            if e > (angle_tolerance if angular else tolerance):
+                return False
+        return True
 
     def reference(self, x: np.ndarray) -> bool:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they
