@@ -140,7 +140,6 @@ class _Layout:
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
-        self.no_starts = np.zeros((0, robot.n))
 
     def bflt(self, weights: tuple[float, ...]) -> np.ndarray:
         """The ``(blocks, 2)`` table of weights and scales for the terms' ``weights`` (built once per weights)."""

@@ -25,7 +25,9 @@ _UNIT = 2.0**-53
 def stream(seed: int | np.random.Generator) -> np.ndarray:
     """A new stream ``uint64 (1,)`` from an integer seed ``>= 0`` (or one integer drawn from a generator)."""
     if type(seed) is int and seed >= 0:  # the common case
-        return np.array([seed % 2**64], dtype=np.uint64)
+        state = np.empty(1, dtype=np.uint64)
+        state[0] = seed % 2**64
+        return state
     if isinstance(seed, np.random.Generator):
         seed = int(seed.integers(0, 2**63))
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:

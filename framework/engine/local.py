@@ -5,8 +5,8 @@ Levenberg-Marquardt with random restarts (:mod:`~framework.engine.reach`), then,
 regularizers (level-2 terms, e.g. motion), minimizes them without leaving the task
 (:func:`~framework.engine.newton.regularize`). Everything runs in compiled code, the random restarts included
 (drawn from a seeded stream, :mod:`~framework.engine.draws`); this module converts the time budget into a
-deadline and names the outcome. :func:`residuals` gives the stacked residuals and Jacobians at one configuration (for predictors,
-task covariances and tests).
+deadline and names the outcome. :func:`residuals` gives the stacked residuals and Jacobians at one
+configuration (for predictors, task covariances and tests).
 """
 
 from __future__ import annotations
