@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+from framework.taskfile import load_task, resolve_task
+
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
 FIGURES = RESULTS / "figures"
@@ -49,21 +51,7 @@ LABELS = {
     "hybrid": "hybrid",
 }
 T_R = (0.0, -0.3, 0.0)
-Q_PREV = np.r_[
-    0,
-    0,
-    np.pi / 2,
-    -np.pi / 2,
-    np.pi / 2,
-    -np.pi / 4,
-    np.pi / 4,
-    0,
-    np.pi / 2,
-    np.pi / 2,
-    -np.pi / 4,
-    np.pi / 4,
-    0,
-]
+Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 000's q_prev (its task file)
 ITERATIONS, POPULATION, SEED = 300, 30, 0
 
 #: Paper 000 Tables 8-11: mean, STD, min, max of e_t1 + e_t2 [m] per path and algorithm.

@@ -9,8 +9,9 @@ import framework as fw
 from framework.costs import Motion, Position
 from framework.problem import Problem
 from framework.solve import solve
+from framework.taskfile import load_task, resolve_task
 
-Q_PREV = np.r_[0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0]
+Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 000's q_prev (its task file)
 
 
 @pytest.fixture(scope="module")

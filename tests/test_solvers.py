@@ -39,10 +39,12 @@ class Recorder:
 
 
 # Accuracy every solver reaches on the shifted 13-D sphere (box [-5, 5]^13, optimum value 0) within
-# 300 iterations of population 30, for both bounds modes (observed values are 10-1000x lower). The
-# best of 9000 uniform samples has f of about 15-30. WOA and SCA move relative to C x* (C ~ U(0, 2)),
-# which biases them toward the coordinate origin: they are poor on a shifted optimum (as in paper 002)
-# and get their own test on a centred sphere below.
+# 300 iterations of population 30, for both bounds modes (observed values are 10-1000x lower). Random search with
+# the same 9,000 evaluations reaches f of about 13-29 (RANDOM below computes it): every stated bound is at least
+# 100x below it (test_stated_accuracies_are_well_below_random_search). WOA and SCA move relative to C x*
+# (C ~ U(0, 2)), which biases them toward the coordinate origin: on a shifted optimum they are poor (as in paper
+# 002; measured 0.3-9 and 2-18) and are only held to beat random search there (``None``); on a centred sphere,
+# below, they are held to 1e-4.
 SPHERE_ACCURACY = {
     "cmaes": 1e-10,
     "cmaes_fast": 1e-10,
@@ -58,14 +60,35 @@ SPHERE_ACCURACY = {
     "ica": 1e-7,
     "tlbo": 1e-10,
     "itlbo": 1e-10,
-    "woa": 30.0,
-    "sca": 40.0,
+    "woa": None,
+    "sca": None,
 }
+ITERATIONS, POPULATION = 300, 30
+
+
+def centred_sphere(X: np.ndarray) -> np.ndarray:
+    return np.sum(X**2, axis=1)
+
+
+def random_search(cost, evaluations: int = ITERATIONS * POPULATION, seed: int = 2026) -> float:
+    """The best value of ``evaluations`` uniform samples of BOX: what a method without any search reaches."""
+    rng = np.random.default_rng(seed)
+    return float(cost(rng.uniform(BOX.lower, BOX.upper, (evaluations, N))).min())
+
+
+RANDOM = {"shifted": random_search(shifted_sphere), "centred": random_search(centred_sphere)}
 
 
 def test_every_registered_solver_has_a_stated_sphere_accuracy():
     assert set(CORE) <= set(available_solvers())
     assert set(available_solvers()) <= set(SPHERE_ACCURACY)
+
+
+def test_stated_accuracies_are_well_below_random_search():
+    assert 10.0 < RANDOM["shifted"] < 40.0 and 5.0 < RANDOM["centred"] < 30.0  # the reference itself
+    for solver, accuracy in SPHERE_ACCURACY.items():
+        assert accuracy is None or accuracy <= RANDOM["shifted"] / 100, solver
+    assert 1e-4 <= RANDOM["centred"] / 1e4  # the centred-sphere bound of WOA and SCA below
 
 
 @pytest.mark.parametrize("bounds", ["resample", "clip"])
@@ -78,11 +101,12 @@ def test_solver_reduces_sphere_and_respects_bounds(solver, bounds):
         BOX,
         solver=solver,
         rng=np.random.default_rng(7),
-        max_iterations=300,
-        f_target=target,
+        max_iterations=ITERATIONS,
+        f_target=target or 0.0,
         bounds=bounds,
     )
-    assert result.f <= target, f"{solver}: f = {result.f:.3e} > {target:.0e}"
+    bound = RANDOM["shifted"] if target is None else target
+    assert result.f <= bound, f"{solver}: f = {result.f:.3e} > {bound:.3e} (random search: {RANDOM['shifted']:.1f})"
     X = cost.all
     assert X.shape == (result.evaluations, N)
     assert np.all(BOX.contains(X)), f"{solver} evaluated candidates outside the box"
@@ -92,13 +116,10 @@ def test_solver_reduces_sphere_and_respects_bounds(solver, bounds):
 
 @pytest.mark.parametrize("solver", ["woa", "sca"])
 def test_origin_biased_solvers_solve_a_centred_sphere(solver):
-    def centred(X):
-        return np.sum(X**2, axis=1)
-
     result = minimize(
-        centred, BOX, solver=solver, rng=np.random.default_rng(7), max_iterations=300, bounds="clip"
+        centred_sphere, BOX, solver=solver, rng=np.random.default_rng(7), max_iterations=ITERATIONS, bounds="clip"
     )
-    assert result.f < 1e-4
+    assert result.f < 1e-4  # random search with the same evaluations: RANDOM["centred"], about 23
 
 
 @pytest.mark.parametrize("solver", CORE)

@@ -9,23 +9,10 @@ import framework as fw
 from framework import trajectory as tr
 from framework.costs import Motion, Position
 from framework.problem import Problem
+from framework.taskfile import load_task, resolve_task
 from framework.tracking import TrackingTask, joint_steps, predictor, track
 
-Q_PREV = np.r_[
-    0,
-    0,
-    np.pi / 2,
-    -np.pi / 2,
-    np.pi / 2,
-    -np.pi / 4,
-    np.pi / 4,
-    0,
-    np.pi / 2,
-    np.pi / 2,
-    -np.pi / 4,
-    np.pi / 4,
-    0,
-]
+Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 000's q_prev (its task file)
 PAPER000 = {
     "frame": "arm1_ee",
     "follower": "arm2_ee",

@@ -22,10 +22,11 @@ from .reach import add_reach_command, reach_command
 from .replay import add_replay_command, replay_command
 from .run import run_command
 
-__all__ = ["EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_MISSED", "EXIT_OK", "main", "resolve_task"]
+__all__ = ["EXIT_INPUT", "EXIT_INTERRUPTED", "EXIT_MISSED", "EXIT_OK", "build_parser", "main", "resolve_task"]
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every ``metaik`` command."""
     parser = argparse.ArgumentParser(
         prog="metaik", description="Inverse kinematics by optimization for any URDF robot."
     )
@@ -58,7 +59,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     console = Console()
     try:
         commands = {"robots": robots_command, "show": show_command, "run": run_command, "tasks": tasks_command,

@@ -40,7 +40,7 @@ class Motion(Term):
             previous = np.array(previous, dtype=float)
         except (TypeError, ValueError):
             raise TaskError(f"previous configuration of group {self.group!r} must be numbers") from None
-        if previous.ndim != 1 or not np.all(np.isfinite(previous)):
+        if previous.ndim != 1 or not np.isfinite(previous).all():
             raise TaskError(f"previous configuration of group {self.group!r} must be a finite vector")
         self.previous = previous
         self._touch()

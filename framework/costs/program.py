@@ -219,8 +219,7 @@ class Program:
         for k, term in enumerate(self.terms):
             if term.version != self._versions[k]:
                 self._versions[k] = term.version
-                blocks, _ = term.packed(self.robot)
-                for (start, stop), block in zip(self.layout.param_slices[k], blocks or ()):
+                for (start, stop), block in zip(self.layout.param_slices[k], term.blocks(self.robot) or ()):
                     params[start:stop] = block.params
 
     def cost(self, X: np.ndarray) -> np.ndarray:
