@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -102,7 +103,7 @@ class RobotShape:
         self._geometry_data = geometry.createData()
         if always > 0:
             self._remove_always_colliding(always)
-        self._covers: dict[tuple, SphereCover] = {}
+        self._covers: dict[tuple, Any] = {}  # sphere covers, and the pairs each cannot separate
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
     def _remove_always_colliding(self, samples: int) -> None:
@@ -127,6 +128,43 @@ class RobotShape:
             self._covers[key] = sphere_cover(self, per_geometry=per_geometry, max_radius=max_radius,
                                              samples=samples, seed=seed)
         return self._covers[key]
+
+    def inseparable(self, cover: SphereCover, *, samples: int = 40, seed: int = 0) -> frozenset[tuple[str, str]]:
+        """The checked geometry pairs whose sphere covers overlap in every one of ``samples`` collision-free
+        configurations (seeded uniform draws that coal's exact check finds clear): covers fatter than the gap
+        between two links that never meet (PR2's shoulder pans: covers overlapping by 12 cm where the meshes stay
+        6 cm apart). No configuration separates them in the sphere model, so a collision term that kept them would
+        make every problem infeasible; collision terms leave them to the exact check (which still decides
+        success). Computed once per cover; empty when fewer than 10 clear configurations turn up in
+        ``20 * samples`` draws."""
+        key = ("inseparable", id(cover), samples, seed)
+        cached = self._covers.get(key)
+        if cached is not None and cached[0] is cover:
+            return cached[1]
+        rng = np.random.default_rng(seed)
+        spheres: dict[str, list[int]] = {}
+        for k, name in enumerate(cover.geometries):
+            spheres.setdefault(name, []).append(k)
+        pairs = [(a, b) for a, b in self.pairs if a in spheres and b in spheres]
+        overlapping = np.ones(len(pairs), dtype=bool)
+        clear = 0
+        for _ in range(20 * samples):
+            x = self.robot.random_configurations(rng, 1)[0]
+            if self.check(x, distances=False).colliding:
+                continue
+            clear += 1
+            centers = cover.world_centers(self, x)
+            for p, (a, b) in enumerate(pairs):
+                if overlapping[p]:
+                    i, j = spheres[a], spheres[b]
+                    gap = np.linalg.norm(centers[i][:, None] - centers[j][None], axis=2) \
+                        - cover.radii[i][:, None] - cover.radii[j][None]
+                    overlapping[p] = gap.min() < 0.0
+            if clear >= samples or not overlapping.any():
+                break
+        found = frozenset(pair for pair, o in zip(pairs, overlapping) if o) if clear >= 10 else frozenset()
+        self._covers[key] = (cover, found)
+        return found
 
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:
         """Geometry name -> ``(joint, placement in the joint, solid parameters (16,), volume [m³])`` of every box,

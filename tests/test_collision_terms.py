@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import framework as fw
+from framework.engine import residuals
 from framework.errors import TaskError
 from tests.test_collision import L, R
 
@@ -59,3 +60,43 @@ def test_sphere_obstacles_are_kept_clear(sphere_arm):
         fw.Obstacles(shape, [])
     with pytest.raises(TaskError, match="margin"):
         fw.SelfCollision(shape, margin=-1.0, cover=exact)
+
+
+def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):
+    """PR2's shoulder pans never meet (coal: apart in every sampled configuration) but their sphere covers overlap
+    in every one: a sphere row for them would make every problem infeasible. SelfCollision leaves that pair (and
+    only pairs like it) out of its rows with a warning; coal's exact check, which decides success, still holds
+    every pair, and a two-hand solve with self-collision succeeds."""
+    joints = ["torso_lift_joint"] + [f"{s}_{j}" for s in "lr" for j in (
+        "shoulder_pan_joint", "shoulder_lift_joint", "upper_arm_roll_joint", "elbow_flex_joint", "forearm_roll_joint",
+        "wrist_flex_joint", "wrist_roll_joint")]
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    cover = shape.cover()
+    shoulders = ("l_shoulder_pan_link_0", "r_shoulder_pan_link_0")
+    assert shape.inseparable(cover) == {shoulders}
+    assert shape.inseparable(cover) is shape.inseparable(cover)  # computed once
+    rng = np.random.default_rng(5)
+    left, right = ([k for k, g in enumerate(cover.geometries) if g == name] for name in shoulders)
+    for x in robot.random_configurations(rng, 5):  # the covers overlap, the meshes do not (independently: coal)
+        c = cover.world_centers(shape, x)
+        gap = np.linalg.norm(c[left][:, None] - c[right][None], axis=2) - cover.radii[left][:, None] \
+            - cover.radii[right][None]
+        assert gap.min() < -0.05
+        assert all({c.a, c.b} != set(shoulders) for c in shape.check(x).contacts)
+    term = fw.SelfCollision(shape)
+    with pytest.warns(UserWarning, match="left to the exact check.*shoulder_pan_link"):
+        blocks = term.blocks(robot)
+    bodies = {b.frames for b in blocks}
+    assert ("body[l_shoulder_pan_joint]", "body[r_shoulder_pan_joint]") not in bodies
+    assert ("body[l_forearm_roll_joint]", "body[r_forearm_roll_joint]") in bodies  # the arms still kept apart
+    with pytest.warns(UserWarning):
+        rows = fw.Problem(robot, term).program  # the term's rows alone
+    x = robot.random_configurations(rng, 1)[0]
+    while shape.check(x, distances=False).colliding or residuals(rows, x)[0].min() < 0:
+        x = robot.random_configurations(rng, 1)[0]  # a target whose configuration the sphere model calls clear
+    hands = ("l_gripper_tool_frame", "r_gripper_tool_frame")
+    objective = fw.Pose(hands[0], robot.frame_placement(x, hands[0])) \
+        + fw.Pose(hands[1], robot.frame_placement(x, hands[1]))
+    result = fw.solve(fw.Problem(robot, objective + term), seed=0, time_budget=5.0)  # the term packed: no new warning
+    assert result.success and not shape.check(result.configuration).colliding  # coal, on the exact meshes

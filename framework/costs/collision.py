@@ -12,6 +12,7 @@ missed target. Each term also has an exact check (:meth:`Term.collisions`, coal 
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -74,6 +75,9 @@ class SelfCollision(Term):
 
     Residual: one row per pair of bodies, the smallest ``‖c_a − c_b‖ − (r_a + r_b)`` over their sphere pairs
     (or signed distance of a sphere to a box minus its radius) minus the margin when negative, else 0 [m].
+    Pairs whose covers no collision-free configuration separates
+    (:meth:`~framework.collision.RobotShape.inseparable`, with a warning naming them) have no row: the exact
+    check of :meth:`collisions`, which decides success, still holds them.
     """
 
     level = "task"
@@ -100,6 +104,11 @@ class SelfCollision(Term):
         other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
         its frame)."""
         solids = self.shape.solids()
+        inseparable = self.shape.inseparable(self.cover)
+        if inseparable:
+            warnings.warn(f"{self.name}: {len(inseparable)} geometry pair(s) whose sphere covers overlap in every "
+                          f"sampled collision-free configuration are left to the exact check: "
+                          f"{sorted(inseparable)}", stacklevel=2)
         spheres: dict[str, list[int]] = {}
         for k, geometry in enumerate(self.cover.geometries):
             spheres.setdefault(geometry, []).append(k)
@@ -107,6 +116,8 @@ class SelfCollision(Term):
         sphere_pairs: dict[tuple[int, int], list[tuple[int, int]]] = {}
         solid_sides: dict[tuple[str, int], set[int]] = {}
         for a, b in self.shape.pairs:
+            if (a, b) in inseparable:
+                continue
             if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
                 a, b = b, a  # b: the solid, a: the spheres
             if b in solids:
