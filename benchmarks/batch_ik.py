@@ -8,8 +8,8 @@ by one (its "Speed" mode, 5 ms budget). metaik solves the same poses: ``solve_ba
 1e-5 rad by Pinocchio FK of the returned configuration (the batch gives each item the same 5 ms budget).
 
 Throughput = poses / wall time of the whole call (``solve_batch`` includes packing the targets and the items it
-hands to ``solve``; the random restarts are drawn inside the compiled loop). TRAC-IK's figure is B / the sum of its per-solve wall
-times (its process start and file output excluded). Each metaik figure is the median of three runs, the
+hands to ``solve``; the random restarts are drawn inside the compiled loop). TRAC-IK's figure is B / the sum of
+its per-solve wall times (its process start and file output excluded). Each metaik figure is the median of three runs, the
 three variants alternated; B = 1 and 100 are repeated to 2,000 poses per run.
 """
 

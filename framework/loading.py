@@ -329,6 +329,8 @@ def _locked_value(value, joint: str, lo: float, hi: float, *, bounded: bool) -> 
 
 #: Frame names that say "sensor", never a default end-effector.
 SENSOR_NAMES = re.compile(r"camera|optical|rgb|depth|laser|lidar|sonar|imu|kinect|xtion|microphone|sensor|(^|_)ft(_|$)")
+#: Frame names of wheels: a chain ending in a continuous joint that carries one is no end-effector.
+WHEEL_NAMES = re.compile(r"wheel|caster")
 #: Frame names that say "tool", best first: the default end-effector of a chain is the first frame matching the
 #: first pattern that any of its frames matches, else its last body frame.
 TOOL_NAMES = tuple(re.compile(p) for p in (r"tcp|tool_frame|end_?effector|grasp", r"tool", r"(gripper|hand)$",
@@ -337,30 +339,57 @@ TOOL_NAMES = tuple(re.compile(p) for p in (r"tcp|tool_frame|end_?effector|grasp"
 
 def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:
     """Default end-effectors: for each solved joint without a solved descendant (a chain's end; wheels and
-    casters — chains of continuous joints only — left out), its tool frame by name (:data:`TOOL_NAMES`), else
-    its last body frame; sensor frames never."""
+    casters — chains of continuous joints only, or a continuous end carrying a wheel frame — left out), its tool
+    frame by name (:data:`TOOL_NAMES`); a chain end without one (a finger, a gripper jaw) gives the tool frame of
+    its nearest solved ancestor that has one, looking up to the first joint where chains branch (a hand's fingers
+    all give the hand's grasp frame, once); else the chain end's last body frame. Sensor frames never."""
     solved = {j.pin_id: j for j in joints}
-    ancestors = {jid: set() for jid in solved}
+    ancestors = {jid: [] for jid in solved}  # nearest first
     for jid in solved:
         parent = model.parents[jid]
         while parent > 0:
-            ancestors[jid].add(parent)
+            ancestors[jid].append(parent)
             parent = model.parents[parent]
     has_solved_child = {a for jid in solved for a in ancestors[jid]}
-    leaves = []
+    ends = []
     for jid, joint in solved.items():
         if jid in has_solved_child:
             continue
         chain = [solved[a] for a in ancestors[jid] if a in solved] + [joint]
         if all(j.kind is JointKind.CONTINUOUS for j in chain):
             continue  # a wheel or a caster: continuous joints all the way from the root
-        frames = [f for f in model.frames if f.parentJoint == jid and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
-                  and not SENSOR_NAMES.search(f.name)]
-        chosen = next((f.name for pattern in TOOL_NAMES for f in frames if pattern.search(f.name)), None)
+        if joint.kind is JointKind.CONTINUOUS and any(WHEEL_NAMES.search(f.name) for f in _frames_on(model, jid)):
+            continue  # a wheel on a suspension
+        ends.append(jid)
+    below = {}  # solved joint -> chain ends beneath it
+    for jid in ends:
+        for a in ancestors[jid]:
+            below[a] = below.get(a, 0) + 1
+    leaves: list[str] = []
+    for jid in ends:
+        frames = _frames_on(model, jid)
+        chosen = _tool(frames)
+        for a in ancestors[jid] if chosen is None else ():
+            if a in solved:
+                chosen = _tool(_frames_on(model, a))
+                if chosen is not None or below.get(a, 0) > 1:
+                    break
         bodies = [f.name for f in frames if f.type == pin.FrameType.BODY]
-        if chosen or bodies:
-            leaves.append(chosen or bodies[-1])
+        name = chosen or (bodies[-1] if bodies else None)
+        if name is not None and name not in leaves:
+            leaves.append(name)
     return leaves
+
+
+def _frames_on(model: pin.Model, jid: int) -> list:
+    """The body and operational frames moving with joint ``jid`` (sensor frames left out)."""
+    return [f for f in model.frames if f.parentJoint == jid and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
+            and not SENSOR_NAMES.search(f.name)]
+
+
+def _tool(frames: list) -> str | None:
+    """The first of ``frames`` matching the best :data:`TOOL_NAMES` pattern any of them matches."""
+    return next((f.name for pattern in TOOL_NAMES for f in frames if pattern.search(f.name)), None)
 
 
 def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, strict: bool = True) -> Robot:
@@ -368,10 +397,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
 
     Given groups must name solved joints (``strict``; a robot index's groups keep the members that are solved).
 
-    Derived groups: joints shared by every end-effector chain (when there are several end-effectors) form one
-    group, ``"base"`` when it starts with a mobile base (a planar joint or a floating base), else named after the
-    link of its first joint (``"torso_lift_link"``); each chain's remaining joints form a group named after the
-    link of its first joint (``"l_shoulder_pan_link"``).
+    Derived groups: the joints on the same set of end-effector chains form one group — the joints several chains
+    share (a torso), and each chain's own joints (an arm) — named after the link of its first joint
+    (``"torso_lift_link"``, ``"l_shoulder_pan_link"``), or ``"base"`` for shared joints that start with a mobile
+    base (a planar joint or a floating base).
     """
     from dataclasses import replace
 
@@ -396,16 +425,21 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
                     chain.append(model.names[jid])
                 jid = model.parents[jid]
             chains.append(chain[::-1])
-        shared = set.intersection(*map(set, chains)) if len(chains) > 1 else set()
-        if shared:
-            first = [j for j in chains[0] if j in shared]
-            mobile = robot.joint(first[0]).kind is JointKind.PLANAR or first[0] in floating_joints(robot.joint_names)
-            result["base" if mobile else _link_of(robot, first[0])] = _coords(robot, first)
-        for frame, chain in zip(robot.end_effectors, chains):
-            own = [j for j in chain if j not in shared]
-            if own:
-                name = _link_of(robot, own[0])
-                result[name if name not in result else frame] = _coords(robot, own)
+        owners: dict[str, frozenset[int]] = {}  # joint -> the chains it is on
+        for k, chain in enumerate(chains):
+            for joint in chain:
+                owners[joint] = owners.get(joint, frozenset()) | {k}
+        segments: dict[frozenset[int], list[str]] = {}  # joints on the same chains form one group, in chain order
+        for k, chain in enumerate(chains):
+            for joint in chain:
+                members = segments.setdefault(owners[joint], [])
+                if joint not in members:
+                    members.append(joint)
+        for (keys, members), frame in zip(segments.items(), (robot.end_effectors[min(k)] for k in segments)):
+            first = members[0]
+            mobile = robot.joint(first).kind is JointKind.PLANAR or first in floating_joints(robot.joint_names)
+            name = "base" if mobile and len(keys) > 1 else _link_of(robot, first)
+            result[name if name not in result else f"{name}:{frame}"] = _coords(robot, members)
     return replace(robot, groups=result)
 
 

@@ -77,3 +77,32 @@ def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
     robot = fw.load_robot(erd / path)
     assert robot.end_effectors and not [f for f in robot.end_effectors if SENSOR_NAMES.search(f)]
     assert not [f for f in robot.end_effectors if "caster" in f]
+
+
+@pytest.mark.parametrize("path, hands, groups", [
+    ("pr2_description/urdf/pr2.urdf", ("l_gripper_tool_frame", "r_gripper_tool_frame"),
+     {"torso_lift_link": 1, "head_pan_link": 2, "l_shoulder_pan_link": 7, "r_shoulder_pan_link": 7}),
+    ("tiago_description/robots/tiago_dual.urdf", ("hand_left_grasping_frame", "hand_right_grasping_frame"),
+     {"torso_lift_link": 1, "arm_left_1_link": 7, "arm_right_1_link": 7, "head_1_link": 2}),
+    ("baxter_description/urdf/baxter.urdf", ("left_gripper", "right_gripper"),
+     {"head": 1, "left_upper_shoulder": 7, "right_upper_shoulder": 7}),
+])
+def test_a_full_urdf_gives_hands_not_fingers_and_disjoint_groups(erd, path, hands, groups):
+    """Every joint of the URDF solved: a hand's fingers (TIAGo: 5 chains per hand; PR2, Baxter: a gripper jaw) give
+    the hand's tool frame once, wheels give none; groups are the joints on the same chains — the torso shared by
+    the arms and the head, each arm, the head — disjoint, named after their first links."""
+    robot = fw.load_robot(erd / path)
+    assert set(hands) <= set(robot.end_effectors)
+    assert not [f for f in robot.end_effectors if "finger" in f or "wheel" in f or "thumb" in f]
+    assert {name: len(idx) for name, idx in robot.groups.items()} == groups
+    members = np.concatenate(list(robot.groups.values()))
+    assert len(set(members.tolist())) == members.size  # disjoint
+    model = robot.model
+    for hand in hands:  # each hand's group is the chain from the shared torso to that hand (independently: the tree)
+        jid, chain = model.frames[robot.frame_id(hand)].parentJoint, []
+        while jid > 0:
+            chain.append(model.names[jid])
+            jid = model.parents[jid]
+        arm = next(idx for idx in robot.groups.values() if len(idx) == 7 and
+                   robot.coordinate_names[idx[-1]] in chain)
+        assert {robot.coordinate_names[i] for i in arm} <= set(chain)
