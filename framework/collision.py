@@ -22,7 +22,6 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -103,7 +102,8 @@ class RobotShape:
         self._geometry_data = geometry.createData()
         if always > 0:
             self._remove_always_colliding(always)
-        self._covers: dict[tuple, Any] = {}  # sphere covers, and the pairs each cannot separate
+        self._covers: dict[tuple, SphereCover] = {}
+        self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
     def _remove_always_colliding(self, samples: int) -> None:
@@ -137,8 +137,8 @@ class RobotShape:
         make every problem infeasible; collision terms leave them to the exact check (which still decides
         success). Computed once per cover; empty when fewer than 10 clear configurations turn up in
         ``20 * samples`` draws."""
-        key = ("inseparable", id(cover), samples, seed)
-        cached = self._covers.get(key)
+        key = (id(cover), samples, seed)
+        cached = self._inseparable.get(key)
         if cached is not None and cached[0] is cover:
             return cached[1]
         rng = np.random.default_rng(seed)
@@ -163,7 +163,7 @@ class RobotShape:
             if clear >= samples or not overlapping.any():
                 break
         found = frozenset(pair for pair, o in zip(pairs, overlapping) if o) if clear >= 10 else frozenset()
-        self._covers[key] = (cover, found)
+        self._inseparable[key] = (cover, found)
         return found
 
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:
