@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import ConfigurationError, UnknownFrameError
 from .native import borrow, keep_alive
-from .robot import JointKind
+from .joints import JointKind
 
 if TYPE_CHECKING:  # pragma: no cover
     from .robot import Robot

@@ -160,7 +160,5 @@ class Problem:
     def errors(self, x: np.ndarray) -> dict[str, float]:
         """Each task block's error at one configuration ``x`` ``(n,)``: distance [m] for position-like terms,
         angle [rad] for orientations, by name (a pose contributes ``name.distance`` and ``name.angle``)."""
-        from .engine import task_errors
-
         x = self.robot.check_population(x)[0]
-        return self.program.named_errors(task_errors(self.program, x).tolist())
+        return self.program.named_errors(self.program.task_errors(x).tolist())

@@ -9,36 +9,20 @@ has ``nq >= n`` entries. Every conversion between the two lives in this module: 
 
 from __future__ import annotations
 
-import enum
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from .errors import ConfigurationError, LimitsError, UnknownFrameError, UnknownJointError, UnsupportedJointError
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .kinematics import FramePoses
+from .joints import JointKind
+from .kinematics import FramePoses, PopulationKinematics
 
 #: Limits beyond this magnitude are treated as "no limit" (URDF continuous joints, planar bases).
 UNBOUNDED = 1e10
-
-
-class JointKind(str, enum.Enum):
-    """How a joint moves, and how many search coordinates it has."""
-
-    REVOLUTE = "revolute"  # 1 angle [rad], bounded
-    CONTINUOUS = "continuous"  # 1 angle [rad], unbounded (Pinocchio stores cos, sin)
-    PRISMATIC = "prismatic"  # 1 displacement [m]
-    PLANAR = "planar"  # x [m], y [m], θ [rad] in the parent's xy-plane (Pinocchio stores x, y, cos, sin)
-
-    @property
-    def width(self) -> int:
-        """Number of search coordinates of one joint of this kind."""
-        return 3 if self is JointKind.PLANAR else 1
 
 
 _KIND_BY_PINOCCHIO = {
@@ -349,7 +333,7 @@ class Robot:
             frames = self.end_effectors
         elif isinstance(frames, str):
             frames = (frames,)
-        return self._kinematics(tuple(frames))(self.check_population(X, finite=False))
+        return self.kinematics(tuple(frames))(self.check_population(X, finite=False))
 
     def frame_jacobians(self, X: np.ndarray, frames: Sequence[str] | str | None = None) -> tuple[FramePoses, np.ndarray]:
         """Poses and world-aligned frame Jacobians ``(pop, k, 6, n)`` in joint coordinates, for a population.
@@ -361,15 +345,19 @@ class Robot:
             frames = self.end_effectors
         elif isinstance(frames, str):
             frames = (frames,)
-        return self._kinematics(tuple(frames)).jacobians(self.check_population(X, finite=False), self.n)
+        return self.kinematics(tuple(frames)).jacobians(self.check_population(X, finite=False), self.n)
 
-    def _kinematics(self, frames: tuple[str, ...]):
-        key = ("kinematics", frames)
-        if key not in self._cache:
-            from .kinematics import PopulationKinematics
+    def kinematics(self, frames: tuple[str, ...]) -> PopulationKinematics:
+        """The compiled forward kinematics and frame Jacobians of ``frames`` over populations (built once)."""
+        return self.memo(("kinematics", frames), lambda: PopulationKinematics(self, frames))
 
-            self._cache[key] = PopulationKinematics(self, frames)
-        return self._cache[key]
+    def memo(self, key: tuple, make: Callable[[], Any]) -> Any:
+        """What ``make()`` returns, built once per robot and ``key`` (compiled-kinematics tables, packed problem
+        layouts: derived from the model, not part of the robot's value)."""
+        value = self._cache.get(key)
+        if value is None:
+            value = self._cache[key] = make()
+        return value
 
     def frame_placement(self, x: np.ndarray, frame: str) -> pin.SE3:
         """World placement of one frame at one configuration, computed by Pinocchio (reference path)."""

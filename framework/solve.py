@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 
 from .collision import CollisionReport
-from .engine import task_errors
 from .errors import SolverError
 from .problem import Problem
 from .solvers import Request, ik_solver
@@ -200,7 +199,7 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
         cost += w * v
     errors = outcome.task_errors
     if errors is None:
-        errors = task_errors(program, x)
+        errors = program.task_errors(x)
     error_list = errors.tolist()
     # an interrupted solve is never a success, whatever its last point (the user stopped it before its end)
     success = outcome.stop_reason != "interrupted" and program.within(error_list, request.tolerance,

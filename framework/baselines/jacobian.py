@@ -51,9 +51,8 @@ def inverse(J: np.ndarray, method: str, *, rcond: float = 1e-6, damping: float =
 def position_and_jacobian(robot: Robot, x: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
     """World position ``(3,)`` [m] of ``frame`` and its position Jacobian ``(3, n)`` in joint coordinates."""
     key = ("position of", frame)
-    program = robot._cache.get(key)
-    if program is None:  # the residual p(x) − 0 of a position term is the position itself
-        program = robot._cache[key] = Program(robot, 1.0 * Position(frame, np.zeros(3)))
+    # the residual p(x) − 0 of a position term is the position itself
+    program = robot.memo(key, lambda: Program(robot, 1.0 * Position(frame, np.zeros(3))))
     return residuals(program, x)
 
 

@@ -30,9 +30,10 @@ from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
 
+from .program import Block, Program, unique_labels
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..collision import CollisionReport
-    from .program import Block
 
 LEVELS = ("task", "regularizer", "value")
 
@@ -88,8 +89,6 @@ class Term:
         """
         if self.blocks(robot) is None:
             raise NotImplementedError(f"{type(self).__name__} defines neither blocks() nor value()")
-        from .program import Program
-
         X = robot.check_population(X, finite=False)
         return Program(robot, Objective(((1.0, self),))).values(X)[:, 0]
 
@@ -209,16 +208,6 @@ class Objective:
     @property
     def frames(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(f for _, t in self.terms for f in t.frames))
-
-
-def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
-    """``names`` made unique in order: a repeated name gets ``#2``, ``#3``, ..."""
-    seen: dict[str, int] = {}
-    out = []
-    for name in names:
-        seen[name] = seen.get(name, 0) + 1
-        out.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
-    return tuple(out)
 
 
 def finite_rows(values, shape: tuple[int, ...], what: str) -> np.ndarray:

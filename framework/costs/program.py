@@ -8,7 +8,7 @@ Terms without blocks (user terms written in numpy) are evaluated by their own ``
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -17,8 +17,7 @@ import numpy as np
 from ..errors import ConfigurationError, TaskError
 from ..robot import JointKind, Robot
 from . import blocks as B
-from .base import unique_labels
-from .kernels import population_cost, population_values
+from .kernels import population_cost, population_values, task_errors_at
 
 if TYPE_CHECKING:  # pragma: no cover
     from .base import Objective, Term
@@ -55,6 +54,16 @@ class Block(NamedTuple):
         return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, len(self.params), indices)
 
 
+def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
+    """``names`` made unique in order: a repeated name gets ``#2``, ``#3``, ..."""
+    seen: dict[str, int] = {}
+    out = []
+    for name in names:
+        seen[name] = seen.get(name, 0) + 1
+        out.append(name if seen[name] == 1 else f"{name}#{seen[name]}")
+    return tuple(out)
+
+
 def _kind(level: int, blocks: tuple[Block, ...] | None) -> str:
     """What a term measures, for reports: ``"position"`` (all its blocks in metres), ``"orientation"`` (all in
     radians), ``"motion"`` (a regularizer), ``"other"``."""
@@ -89,7 +98,7 @@ class _Layout:
         levels = [_LEVELS[t.level] for t in terms]
         frames = list(dict.fromkeys(f for p in packed if p for block in p for f in block.frames))
         self.frames = tuple(frames)
-        kinematics = robot._kinematics(self.frames)
+        kinematics = robot.kinematics(self.frames)
         self.kin = kinematics.tables
         self.chains = kinematics.chains
         slot = {f: i for i, f in enumerate(frames)}
@@ -169,9 +178,7 @@ class Program:
         weights = self.weight_list = tuple([w for w, _ in objective])  # floats (``Objective`` checked them)
         packed = [t.packed(robot) for t in self.terms]
         key = ("layout", tuple((t.level, t.name, signature) for t, (_, signature) in zip(self.terms, packed)))
-        layout = robot._cache.get(key)
-        if layout is None:
-            layout = robot._cache[key] = _Layout(robot, self.terms, [blocks for blocks, _ in packed])
+        layout = robot.memo(key, lambda: _Layout(robot, self.terms, [blocks for blocks, _ in packed]))
         self.layout = layout
         self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
         flat = [b.params for blocks, _ in packed if blocks for b in blocks]
@@ -197,8 +204,17 @@ class Program:
             named[name] = max(e, named.get(name, e))
         return named
 
+    def task_errors(self, x: np.ndarray) -> np.ndarray:
+        """``(blocks,)`` each task block's error ``‖r_b‖`` at one configuration ``x`` ``(n,)`` [m, or rad for
+        orientations], in block order."""
+        self.refresh()
+        errors = np.empty(self.task_block_rows.size)
+        if errors.size:
+            task_errors_at(np.ascontiguousarray(x, dtype=float), self.kin, self.prog, errors)
+        return errors
+
     def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float) -> bool:
-        """Whether every task block's error (block order, from :func:`framework.engine.task_errors`) is within
+        """Whether every task block's error (block order, from :meth:`task_errors`) is within
         ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others."""
         for e, angular in zip(errors, self.task_angular):
             if e > (angle_tolerance if angular else tolerance):

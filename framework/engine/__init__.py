@@ -18,7 +18,6 @@ from .local import (
     residuals,
     search_box,
     solve_local,
-    task_errors,
 )
 
 __all__ = [
@@ -31,5 +30,4 @@ __all__ = [
     "residuals",
     "search_box",
     "solve_local",
-    "task_errors",
 ]

@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..costs.blocks import LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS
-from ..costs.kernels import residuals_at, task_errors_at
+from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
 from . import newton
@@ -177,15 +177,6 @@ def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK) -> tuple
     return r[:m], J[:m]
 
 
-def task_errors(program: Program, x: np.ndarray) -> np.ndarray:
-    """``(blocks,)`` each task block's error ``‖r_b‖`` at ``x`` [m, or rad for orientations], in block order."""
-    program.refresh()
-    errors = np.empty(program.task_block_rows.size)
-    if errors.size:
-        task_errors_at(np.ascontiguousarray(x, dtype=float), program.kin, program.prog, errors)
-    return errors
-
-
 def reaching_is_optimal(program: Program, x: np.ndarray, multipliers: np.ndarray | None) -> bool:
     """Whether ``x`` — on the task, regularizers minimized there — also minimizes the weighted sum locally
     (every task block an exact penalty for the task's multipliers; see :func:`~framework.engine.newton.
@@ -221,7 +212,7 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray 
     deadline_ns = _nanoseconds(deadline)
     evaluations = 0
     task = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
-    held = np.ones(task.size, dtype=bool) if multipliers is not None else task_errors(program, x) <= near
+    held = np.ones(task.size, dtype=bool) if multipliers is not None else program.task_errors(x) <= near
     lam = None if multipliers is None else np.ascontiguousarray(multipliers, dtype=float)
     for _ in range(2 * task.size + 2):
         if lam is not None:  # release the held blocks that are no exact penalty for their multipliers
@@ -229,7 +220,7 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray 
             newton.exact_penalties(prog, lam, pays)
             new = held.copy()
             new[np.flatnonzero(held)[~pays]] = False
-            new |= task_errors(program, x) <= near  # released blocks sitting on their target: hold them exactly
+            new |= program.task_errors(x) <= near  # released blocks sitting on their target: hold them exactly
             if np.array_equal(new, held):
                 break
             held = new

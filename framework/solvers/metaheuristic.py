@@ -79,9 +79,7 @@ class Metaheuristic(IKSolver):
 
 def within(problem, x: np.ndarray, request: Request) -> bool:
     """Whether every task term of ``problem`` is within the request's tolerances at ``x``."""
-    from ..engine import task_errors
-
-    return problem.program.within(task_errors(problem.program, x).tolist(), request.tolerance,
+    return problem.program.within(problem.program.task_errors(x).tolist(), request.tolerance,
                                   request.angle_tolerance)
 
 
@@ -89,8 +87,6 @@ def feasibility_cost(problem, request: Request) -> Callable[[np.ndarray], np.nda
     """Deb's rules as a population cost ``(pop, n) -> (pop,)``: the weighted regularizers where every task block
     is within the request's tolerances, else ``bound + `` the weighted task terms, with ``bound`` above any
     regularizer cost in the box (every regularizer value is at most its value's scale times the box diagonal)."""
-    from ..engine import task_errors
-
     task = problem.task_mask
     weights = problem.weights
     diagonal = float(np.linalg.norm(problem.robot.upper - problem.robot.lower))
@@ -101,7 +97,7 @@ def feasibility_cost(problem, request: Request) -> Callable[[np.ndarray], np.nda
         values = problem.values(X)
         F = values[:, ~task] @ weights[~task]
         for i, x in enumerate(X):
-            errors = task_errors(program, x).tolist()
+            errors = program.task_errors(x).tolist()
             if not program.within(errors, request.tolerance, request.angle_tolerance):
                 F[i] = bound + values[i, task] @ weights[task]
         return F
