@@ -160,7 +160,7 @@ class PopulationKinematics:
 
 
 @numba.njit(cache=True, inline="always")
-def _fk_one(x, jint, jgeo, fslot, fgeo, out, W):
+def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
     """Forward kinematics of one configuration ``x`` into ``out (k, 12)``.
 
     ``out`` rows hold the rotation row-major, then the position.
@@ -271,7 +271,7 @@ def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
         if not _finite(X[b]):
             bad = b
             break
-        _fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
+        fk_one(X[b], jint, jgeo, fslot, fgeo, out[b], W)
     keep_alive(own)
     return bad
 
@@ -299,7 +299,7 @@ def fk_jacobian_one(x, jint, jgeo, fslot, fgeo, out, W, J):
     ``J[f, 0:3, i]``: derivative of frame ``f``'s origin [m per coordinate unit]; ``J[f, 3:6, i]``: its world
     angular velocity per coordinate rate (zero for prismatic coordinates and planar translations).
     """
-    _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+    fk_one(x, jint, jgeo, fslot, fgeo, out, W)
     frame_jacobians(x, jint, jgeo, fslot, out, W, J)
 
 

@@ -1,7 +1,7 @@
 """Numba's on-disk cache kept consistent with the sources.
 
 numba keys a cached function on its own file only, so after an edit to a function that others inline
-(``block_residual``, ``_fk_one``, ...) the callers' cached machine code is stale: it runs the old definition
+(``block_residual``, ``fk_one``, ...) the callers' cached machine code is stale: it runs the old definition
 (seen here: an unknown block kind falling into another kind's branch and writing past its rows). On import, the
 package's sources are hashed; when the hash differs from the one stamped beside the cache, every cached entry of
 the package is removed and the new hash stamped. A fresh install has no entries; a read-only one keeps its own.

@@ -328,7 +328,7 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
         reserved = sorted(set(variables) & set(WAYPOINT_VARIABLES))
         if reserved:
             raise TaskError(f"case {name!r}: {reserved} are waypoint variables of a tracking task; rename them")
-        trajectory = _trajectory(spec, variables, path, points, f"case {name!r}: trajectory")
+        trajectory = trajectory_from_table(spec, variables, path, points, f"case {name!r}: trajectory")
         _check_uses_waypoint(terms)
         builder = _TermsAtWaypoint(robot, terms, variables, world)
         first = builder(0, trajectory.positions[0], trajectory.rotation(0), previous)
@@ -490,7 +490,8 @@ def _names(expression: str) -> set[str]:
     return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
 
 
-def _trajectory(spec: Any, variables: Mapping, path: Path, points: int | None, where: str) -> Trajectory:
+def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int | None,
+                          where: str) -> Trajectory:
     """A :class:`Trajectory` from a ``[trajectory]`` table (see the module docstring)."""
     if not isinstance(spec, dict):
         raise TaskError(f"{where} must be a table")

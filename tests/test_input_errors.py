@@ -85,7 +85,12 @@ def test_ctrl_c_in_a_multi_case_run_stops_it_and_is_never_success(tmp_path):
                                stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
     header = process.stdout.readline()  # printed just before the first case starts
     assert "youbot_dual_coordinated_ik" in header, header
-    time.sleep(3)  # well into the first case's 200,000 generations (~3 minutes in all)
+    import psutil  # (with dask's distributed, a test dependency)
+
+    child, start = psutil.Process(process.pid), time.monotonic()
+    begun = sum(child.cpu_times()[:2])
+    while sum(child.cpu_times()[:2]) < begun + 1.5 and time.monotonic() - start < 60:  # 1.5 s of CPU into the
+        time.sleep(0.1)  # first case's 200,000 generations (~3 minutes in all), however loaded the machine is
     process.send_signal(signal.SIGINT)
     try:
         out, err = process.communicate(timeout=120)

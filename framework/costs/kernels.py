@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..kinematics import _fk_one, frame_jacobians
+from ..kinematics import fk_one, frame_jacobians
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .blocks import (
     LEVEL,
@@ -86,7 +86,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     out, W, Jf, r, Jr, L3, E9 = borrow_ws(ws)
     x = borrow(x)
     if kinematics == 1:
-        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+        fk_one(x, jint, jgeo, fslot, fgeo, out, W)
     if want_jacobian and kinematics >= 1:
         frame_jacobians(x, jint, jgeo, fslot, out, W, Jf)
     row = ROW0
@@ -196,7 +196,7 @@ def _population(X, kin, prog, V, F, weighted) -> int:
                 bad = m
         if bad >= 0:
             break
-        _fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+        fk_one(x, jint, jgeo, fslot, fgeo, out, W)
         f = 0.0
         for b in range(bint.shape[0]):
             rows = block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, ROW0, NO, L3, E9)

@@ -60,7 +60,7 @@ class Fabrik:
             max_iterations: cap on forward + backward iterations.
         """
         start = time.perf_counter()
-        target = _check_target(target)
+        target = check_target(target)
         x0 = self.robot.check_population(x0, "start configuration")[0]
         chain = self.chain
         local = self._fk.joint_placement(x0, chain.root).actInv(target)
@@ -139,7 +139,8 @@ class Fabrik:
         return min(chain.yaw_headings(local), key=score)
 
 
-def _check_target(target: np.ndarray) -> np.ndarray:
+def check_target(target: np.ndarray) -> np.ndarray:
+    """``target`` as a float ``(3,)`` position [m]; raises :class:`TaskError` unless it is 3 finite numbers."""
     target = np.asarray(target, dtype=float)
     if target.shape != (3,) or not np.isfinite(target).all():
         raise TaskError(f"a position target must be 3 finite numbers [m]; got {target!r}")

@@ -27,7 +27,7 @@ import pinocchio as pin
 
 from ..baselines.jacobian import dls_inverse, svd_pinv
 from ..robot import JointKind, Robot
-from .fabrik import _check_target
+from .fabrik import check_target
 from .kinematics import PointKinematics
 from .result import ReachResult
 
@@ -97,7 +97,7 @@ class JacobianIK:
     ) -> ReachResult:
         """Drive the frame to ``target`` ``(3,)`` [m] from ``x0`` ``(n,)``."""
         start = time.perf_counter()
-        target = _check_target(target)
+        target = check_target(target)
         x = self.robot.check_population(x0, "start configuration")[0].copy()
         model, data, fid = self._fk.model, self._fk.data, self._fk.frame_id
         lower, upper, s = self.robot.lower, self.robot.upper, self.settings

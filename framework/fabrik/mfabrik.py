@@ -39,7 +39,7 @@ import numpy as np
 from ..robot import Robot
 from .angles import clamp_angle
 from .environment import Environment
-from .fabrik import _check_target
+from .fabrik import check_target
 from .kinematics import PointKinematics
 from .mobile import BaseOrientation, MobileArm
 from .passes import Links, backward, forward
@@ -125,7 +125,7 @@ class MFabrik:
             max_iterations: cap on iterations.
         """
         start = time.perf_counter()
-        target = _check_target(target)
+        target = check_target(target)
         x0 = self.robot.check_population(x0, "start configuration")[0]
         arm, chain = self.arm, self.arm.chain
         ix, iy, ith = arm.base
@@ -209,7 +209,7 @@ class MFabrik:
         """Configuration ``(n,)`` with the base at ``base`` ``(x, y)`` [m], turned by the rule, and the arm reaching
         for ``target`` from its shape in ``x_previous`` by FABRIK on that fixed base (Algorithm 2's intermediate
         configurations; the target need not be reachable from there)."""
-        target = _check_target(target)
+        target = check_target(target)
         x_previous = self.robot.check_population(x_previous, "previous configuration")[0]
         arm, chain = self.arm, self.arm.chain
         ix, iy, ith = arm.base

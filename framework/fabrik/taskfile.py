@@ -47,7 +47,7 @@ from ..errors import TaskError
 from ..loading import load_robot
 from ..robot import Robot
 from ..scene import Scene
-from ..taskfile import _trajectory, evaluate
+from ..taskfile import trajectory_from_table, evaluate
 from .environment import Circle, Environment, Polygon, Rectangle
 from .jacobian import JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
 from .mfabrik import MFabrik
@@ -181,7 +181,7 @@ def reach_task_from_dict(raw: Mapping[str, Any], path: Path, *, points: int | No
         if points is not None:
             random = points
     else:
-        targets = _trajectory(reach["trajectory"], {}, path, points, "[reach.trajectory]").positions
+        targets = trajectory_from_table(reach["trajectory"], {}, path, points, "[reach.trajectory]").positions
     start = _start(reach.get("start"), robot) if "start" in reach else None
     if targets is not None and start is None:
         raise TaskError("[reach] a path needs a start configuration (start = { base = [...], arm = [...] })")
