@@ -327,14 +327,15 @@ def _locked_value(value, joint: str, lo: float, hi: float, *, bounded: bool) -> 
     return value
 
 
-#: Frame names that say "sensor", never a default end-effector.
-SENSOR_NAMES = re.compile(r"camera|optical|rgb|depth|laser|lidar|sonar|imu|kinect|xtion|microphone|sensor|(^|_)ft(_|$)")
+#: Frame names that say "sensor" (any case), never a default end-effector.
+SENSOR_NAMES = re.compile(r"camera|optical|rgb|depth|laser|lidar|sonar|imu|kinect|xtion|microphone|sensor|(^|_)ft(_|$)",
+                          re.IGNORECASE)
 #: Frame names of wheels: a chain ending in a continuous joint that carries one is no end-effector.
-WHEEL_NAMES = re.compile(r"wheel|caster")
+WHEEL_NAMES = re.compile(r"wheel|caster", re.IGNORECASE)
 #: Frame names that say "tool", best first: the default end-effector of a chain is the first frame matching the
 #: first pattern that any of its frames matches, else its last body frame.
-TOOL_NAMES = tuple(re.compile(p) for p in (r"tcp|tool_frame|end_?effector|grasp", r"tool", r"(gripper|hand)$",
-                                             r"palm"))
+TOOL_NAMES = tuple(re.compile(p, re.IGNORECASE) for p in (r"tcp|tool_frame|end_?effector|grasp", r"tool",
+                                                           r"(gripper|hand)$", r"palm"))
 
 
 def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:

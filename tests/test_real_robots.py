@@ -70,13 +70,15 @@ def test_default_end_effectors_are_the_tools_of_the_solved_chains(erd, name, exp
 
 
 @pytest.mark.parametrize("path", ["pr2_description/urdf/pr2.urdf", "tiago_description/robots/tiago_dual.urdf",
-                                  "talos_data/robots/talos_reduced.urdf"])
+                                  "talos_data/robots/talos_reduced.urdf",
+                                  "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"])
 def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
     from framework.loading import SENSOR_NAMES
 
     robot = fw.load_robot(erd / path)
     assert robot.end_effectors and not [f for f in robot.end_effectors if SENSOR_NAMES.search(f)]
     assert not [f for f in robot.end_effectors if "caster" in f]
+    assert not [f for f in robot.end_effectors if any(w in f.lower() for w in ("imu", "camera", "laser"))]  # any case
 
 
 @pytest.mark.parametrize("path, hands, groups", [
