@@ -209,7 +209,8 @@ def robot_from_urdf(
     model, locked_values = _reduce(full, joints, locked or {}, mimic)
     robot_joints, mimics = build_joints(model, mimic)
     if not robot_joints:
-        raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve")
+        raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve (a free-flying body is "
+                                "solved with floating_base=True)")
     lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
     if end_effectors is None:
         end_effectors = _leaf_frames(model, robot_joints)
@@ -398,10 +399,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
 
     Given groups must name solved joints (``strict``; a robot index's groups keep the members that are solved).
 
-    Derived groups: the joints on the same set of end-effector chains form one group — the joints several chains
-    share (a torso), and each chain's own joints (an arm) — named after the link of its first joint
-    (``"torso_lift_link"``, ``"l_shoulder_pan_link"``), or ``"base"`` for shared joints that start with a mobile
-    base (a planar joint or a floating base).
+    Derived groups: a mobile base (a planar joint, or the six joints of a floating base) is ``"base"``; the other
+    joints on the same set of end-effector chains form one group — the joints several chains share (a torso), and
+    each chain's own joints (an arm) — named after the link of its first joint (``"torso_lift_link"``,
+    ``"l_shoulder_pan_link"``).
     """
     from dataclasses import replace
 
@@ -426,6 +427,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
                     chain.append(model.names[jid])
                 jid = model.parents[jid]
             chains.append(chain[::-1])
+        floating = floating_joints(robot.joint_names)
+        base = [j for chain in chains for j in chain if robot.joint(j).kind is JointKind.PLANAR or j in floating]
+        if base:  # a mobile base (planar or floating joints) is one group, whatever the chains
+            result["base"] = _coords(robot, list(dict.fromkeys(base)))
         owners: dict[str, frozenset[int]] = {}  # joint -> the chains it is on
         for k, chain in enumerate(chains):
             for joint in chain:
@@ -434,13 +439,13 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
         for k, chain in enumerate(chains):
             for joint in chain:
                 members = segments.setdefault(owners[joint], [])
-                if joint not in members:
+                if joint not in members and joint not in base:
                     members.append(joint)
-        for (keys, members), frame in zip(segments.items(), (robot.end_effectors[min(k)] for k in segments)):
-            first = members[0]
-            mobile = robot.joint(first).kind is JointKind.PLANAR or first in floating_joints(robot.joint_names)
-            name = "base" if mobile and len(keys) > 1 else _link_of(robot, first)
-            result[name if name not in result else f"{name}:{frame}"] = _coords(robot, members)
+        for keys, members in segments.items():
+            if members:
+                name = _link_of(robot, members[0])
+                result[name if name not in result else f"{name}:{robot.end_effectors[min(keys)]}"] = \
+                    _coords(robot, members)
     return replace(robot, groups=result)
 
 

@@ -108,3 +108,19 @@ def test_a_full_urdf_gives_hands_not_fingers_and_disjoint_groups(erd, path, hand
         arm = next(idx for idx in robot.groups.values() if len(idx) == 7 and
                    robot.coordinate_names[idx[-1]] in chain)
         assert {robot.coordinate_names[i] for i in arm} <= set(chain)
+
+
+def test_a_free_flyer_without_joints_is_solved_as_a_floating_base(erd):
+    """Hector's quadrotor has no movable joint: loading it says so and how to solve it; with a floating base its six
+    coordinates are the group "base" (as on Talos, where the legs, torso, arms and head keep their own groups)."""
+    path = erd / "hector_description" / "robots" / "quadrotor_base.urdf"
+    with pytest.raises(fw.UnknownJointError, match="no movable joint.*floating_base=True"):
+        fw.load_robot(path)
+    drone = fw.load_robot(path, floating_base=True)
+    assert {name: len(idx) for name, idx in drone.groups.items()} == {"base": 6}
+    target = drone.frame_placement(drone.middle + 0.1, "base_link")
+    assert fw.solve(fw.Problem(drone, fw.Pose("base_link", target)), seed=0).success
+    talos = fw.load_robot(erd / "talos_data" / "robots" / "talos_reduced.urdf", floating_base=True)
+    assert {name: len(idx) for name, idx in talos.groups.items()} == {
+        "base": 6, "leg_left_1_link": 6, "leg_right_1_link": 6, "torso_1_link": 2, "arm_left_1_link": 8,
+        "arm_right_1_link": 8, "head_1_link": 2}
