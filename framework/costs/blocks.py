@@ -265,6 +265,16 @@ def _hinge_row(value, r, Jr, row, want_jacobian, n) -> bool:
     return want_jacobian and below
 
 
+@numba.njit(cache=True, inline="always")
+def _sphere_pair(out, fa, fb, params, q):
+    """The offsets ``o_a = R_a c_a``, ``o_b = R_b c_b`` of a sphere pair's centres (``params[q:q + 8]``: ``c_a, r_a,
+    c_b, r_b``) on frames ``fa`` and ``fb``, and the vector between the centres in the world (9 scalars)."""
+    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
+    return (a0, a1, a2, b0, b1, b2, out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1,
+            out[fa, 11] + a2 - out[fb, 11] - b2)
+
+
 @numba.njit(cache=True)
 def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -> None:
     """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_k ‖(p_a + R_a c_ak) − (p_b + R_b c_bk)‖ − r_ak
@@ -274,22 +284,13 @@ def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -
     best, arg = 1e300, -1
     for k in range(count):
         q = p + 2 + 8 * k
-        a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-        b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
-        v0 = out[fa, 9] + a0 - out[fb, 9] - b0
-        v1 = out[fa, 10] + a1 - out[fb, 10] - b1
-        v2 = out[fa, 11] + a2 - out[fb, 11] - b2
+        _, _, _, _, _, _, v0, v1, v2 = _sphere_pair(out, fa, fb, params, q)
         d = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2) - params[q + 3] - params[q + 7]
         if d < best:
             best, arg = d, k
     if not _hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
-    q = p + 2 + 8 * arg
-    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-    b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
-    v0 = out[fa, 9] + a0 - out[fb, 9] - b0
-    v1 = out[fa, 10] + a1 - out[fb, 10] - b1
-    v2 = out[fa, 11] + a2 - out[fb, 11] - b2
+    a0, a1, a2, b0, b1, b2, v0, v1, v2 = _sphere_pair(out, fa, fb, params, p + 2 + 8 * arg)
     norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
     if norm > 0.0:
         u0, u1, u2 = v0 / norm, v1 / norm, v2 / norm

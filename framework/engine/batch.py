@@ -22,7 +22,7 @@ import numpy as np
 from ..costs.program import Program
 from . import newton
 from .clock import monotonic_ns
-from .local import RESTARTS, LocalSettings, search_box
+from .local import LocalSettings, search_box
 from .reach import REACHED, reach
 
 #: Items per compiled call at most (the unit of work a thread takes, and of progress reports).
@@ -105,7 +105,7 @@ def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
     prog = list(program.prog)
     prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    descend(items, state.X, RESTARTS if settings.restarts else 0, streams, P, lower, upper, box_wrap, program.kin,
+    descend(items, state.X, settings.max_restarts, streams, P, lower, upper, box_wrap, program.kin,
             tuple(prog),
             settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish,
             bool(settings.regularize and program.has_regularizers), settings.regularize_iterations,

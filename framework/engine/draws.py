@@ -24,15 +24,14 @@ _UNIT = 2.0**-53
 
 def stream(seed: int | np.random.Generator) -> np.ndarray:
     """A new stream ``uint64 (1,)`` from an integer seed ``>= 0`` (or one integer drawn from a generator)."""
-    if type(seed) is int and seed >= 0:  # the common case
-        state = np.empty(1, dtype=np.uint64)
-        state[0] = seed % 2**64
-        return state
-    if isinstance(seed, np.random.Generator):
-        seed = int(seed.integers(0, 2**63))
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
-    return np.array([int(seed) % 2**64], dtype=np.uint64)
+    if not (type(seed) is int and seed >= 0):  # the common case needs no check
+        if isinstance(seed, np.random.Generator):
+            seed = int(seed.integers(0, 2**63))
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
+    state = np.empty(1, dtype=np.uint64)  # (a list would cost a conversion)
+    state[0] = int(seed) % 2**64
+    return state
 
 
 @numba.njit(cache=True)

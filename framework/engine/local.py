@@ -25,8 +25,6 @@ from . import newton
 from .draws import stream
 from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
 
-#: Restarts of a descent that may restart: as many as its iteration and time budgets allow.
-RESTARTS = 2**62
 _REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
                       newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
 
@@ -76,6 +74,11 @@ class LocalSettings:
     @property
     def angular(self) -> float:
         return self.tolerance if self.angle_tolerance is None else self.angle_tolerance
+
+    @property
+    def max_restarts(self) -> int:
+        """Random restarts a descent may take: as many as its iteration and time budgets allow, or none."""
+        return 2**62 if self.restarts else 0
 
 
 class LocalResult(NamedTuple):
@@ -144,7 +147,7 @@ def solve_local(
     values = np.zeros(len(program.terms))
     code = REACHED
     if program.task_rows:
-        code = reach(x, RESTARTS if settings.restarts else 0, rng if isinstance(rng, np.ndarray) else stream(rng),
+        code = reach(x, settings.max_restarts, rng if isinstance(rng, np.ndarray) else stream(rng),
                      lower, upper, box_wrap, program.kin, program.prog, settings.tolerance, settings.angular,
                      settings.max_iterations, settings.stall, deadline_ns, settings.polish, errors, values, stats)
     iterations, evaluations, restarts = stats.tolist()
