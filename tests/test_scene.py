@@ -3,6 +3,8 @@ finite differences, solves against a brute-force grid, the exact check deciding 
 
 from __future__ import annotations
 
+import warnings
+
 import coal
 import numpy as np
 import pinocchio as pin
@@ -365,28 +367,60 @@ def test_frames_added_by_a_collision_term_after_a_drawing_was_made():
     np.testing.assert_allclose(M[0, robot.frame_id("arm1_ee")], robot.frame_placement(robot.middle, "arm1_ee").homogeneous)
 
 
-def test_population_values_equal_a_direct_computation(rng):
+def _pr2_with_srdf(erd) -> tuple[fw.Robot, fw.RobotShape]:
+    joints = ["torso_lift_joint"] + [f"{side}_{name}_joint" for side in "lr" for name in
+                                     ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll",
+                                      "wrist_flex", "wrist_roll")]
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=joints)
+    return robot, fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+
+
+@pytest.mark.parametrize("name", ["youbot_dual", "pr2"])
+def test_population_values_equal_a_direct_computation(name, rng, request):
     """The self-collision and obstacle terms' values over a population equal a numpy computation from Pinocchio's
-    sphere centres: per pair of bodies the most negative of (centre distance − radii − margin), summed as
-    |min(0, ·)|; per body and obstacle the same with the box's closed-form signed distance."""
-    robot = fw.load_robot("youbot_dual")
-    shape = fw.RobotShape(robot)
+    sphere centres: per pair of bodies the most negative of (centre distance − radii − margin) over every sphere
+    pair of their checked geometry pairs, summed as |min(0, ·)|; per body and obstacle the same with the box's
+    closed-form signed distance. The compiled rows skip bodies and spheres by bounding spheres and list a body
+    pair's spheres once with a mask of the checked pairs (youbot_dual has such masked pairs, PR2's 612 spheres
+    make the pruning count); none of it may change a value."""
+    if name == "pr2":
+        robot, shape = _pr2_with_srdf(request.getfixturevalue("erd"))
+    else:
+        robot = fw.load_robot(name)
+        shape = fw.RobotShape(robot)
     cover = shape.cover()
     margin = 0.01
     box = fw.Box([0.3, 0.0, 0.35], [0.3, 0.6, 0.1])
-    self_term, obstacle_term = fw.SelfCollision(shape, margin=margin), fw.Obstacles(shape, [box], margin=margin)
-    X = robot.random_configurations(rng, 40)
-    values = fw.Problem(robot, self_term + obstacle_term).values(X)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # PR2's shoulder pans: left to the exact check
+        self_term = fw.SelfCollision(shape, margin=margin)
+        values = fw.Problem(robot, self_term + fw.Obstacles(shape, [box], margin=margin)).values(
+            X := robot.random_configurations(rng, 40))
+    skipped = shape.inseparable(cover)
     index = {name: [k for k, g in enumerate(cover.geometries) if g == name] for name in set(cover.geometries)}
+    solids = shape.solids()
     for m, x in enumerate(X):
         C = cover.world_centers(shape, x)
-        worst: dict[tuple[int, int], float] = {}
+        worst: dict[tuple, float] = {}
+        data = robot.model.createData()
+        pin.forwardKinematics(robot.model, data, robot.to_pinocchio(x))
         for a, b in shape.pairs:
-            for i in index[a]:
-                for j in index[b]:
-                    key = tuple(sorted((int(cover.joints[i]), int(cover.joints[j]))))
-                    d = np.linalg.norm(C[i] - C[j]) - cover.radii[i] - cover.radii[j] - margin
-                    worst[key] = min(worst.get(key, np.inf), d)
+            if (a, b) in skipped:
+                continue
+            if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
+                a, b = b, a
+            if b in solids:  # a link's own box: a's spheres against it, in its frame, one row per (box, body)
+                joint, placement, solid, _ = solids[b]
+                frame = data.oMi[joint] * placement
+                d = min(solid_distance(*frame.actInv(C[i]), solid, 0, np.empty(3)) - cover.radii[i] - margin
+                        for i in index[a])
+                key = (b, int(cover.joints[index[a][0]]))
+                worst[key] = min(worst.get(key, np.inf), d)
+                continue
+            D = np.linalg.norm(C[index[a]][:, None] - C[index[b]][None], axis=2) \
+                - cover.radii[index[a]][:, None] - cover.radii[index[b]][None] - margin
+            key = tuple(sorted((int(cover.joints[index[a][0]]), int(cover.joints[index[b][0]]))))
+            worst[key] = min(worst.get(key, np.inf), D.min())
         expected_self = sum(-min(0.0, d) for d in worst.values())
         q = np.abs(C - box.center) - box.size / 2
         sd = np.linalg.norm(np.maximum(q, 0), axis=1) + np.minimum(q.max(axis=1), 0) - cover.radii - margin
@@ -395,3 +429,29 @@ def test_population_values_equal_a_direct_computation(rng):
         assert values[m, 0] == pytest.approx(expected_self, abs=1e-12)
         assert values[m, 1] == pytest.approx(expected_box, abs=1e-12)
     assert (values[:, 0] > 0).sum() >= 5 and (values[:, 1] > 0).sum() >= 5  # both terms active on some members
+
+
+def test_jacobians_from_kept_poses_equal_a_full_linearization(rng):
+    """The engine's accepted-step path (poses and residuals first, then Jacobians from the kept poses, where
+    clear hinge rows keep a zero Jacobian without a second evaluation) gives the rows and Jacobian of one full
+    call, on configurations with both clear and active collision rows."""
+    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, workspace
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    shape = fw.RobotShape(robot)
+    objective = fw.Position("arm1_ee", [0.5, 0.1, 0.4]) + fw.SelfCollision(shape, margin=0.02) \
+        + fw.Obstacles(shape, [fw.Box([0.4, 0.0, 0.3], [0.3, 0.6, 0.05])], margin=0.02)
+    program = fw.Problem(robot, objective).program
+    n = robot.n
+    active = clear = 0
+    for x in robot.random_configurations(rng, 30):
+        full, kept = workspace(program.kin, program.prog, n), workspace(program.kin, program.prog, n)
+        m = linearize(x, TASK, program.kin, program.prog, full, YES, COMPUTE)
+        linearize(x, TASK, program.kin, program.prog, kept, NO, COMPUTE)
+        kept[4][:] = np.nan  # nothing of a previous Jacobian may survive
+        assert linearize(x, TASK, program.kin, program.prog, kept, YES, JACOBIANS_FROM_POSES) == m
+        np.testing.assert_array_equal(kept[3][:m], full[3][:m])
+        np.testing.assert_array_equal(kept[4][:m], full[4][:m])
+        active += int((full[3][3:m] != 0).sum())
+        clear += int((full[3][3:m] == 0).sum())
+    assert active >= 10 and clear >= 100

@@ -20,8 +20,8 @@ kind            residual                                      Jacobian          
 ``RELATIVE_ROTATION`` ``log((R_a R_o)ᵀ R_b)`` (3) [rad]        ``J_l⁻¹(r)(R_a R_o)ᵀ(ω_b − ω_a)``  ``R_o`` (9)
 ``LOOK_AT``     ``R_a e − u``, ``u = (t − p_a)/‖t − p_a‖`` (3)  ``ω × R_a e + (I − uuᵀ)J_p,a/‖t − p_a‖``  ``e, t`` (6)
 ``COM``         ``Σ_k m_k p_k − t`` on chosen axes [m]           ``Σ_k m_k J_p,k``           ``t``, axes mask, ``m_k``
-``SPHERES``     ``min(0, min_k ‖s_ak − s_bk‖ − r_ak − r_bk − m)``  the closest pair's           count, m, pairs (8 each)
-``SOLIDS``      ``min(0, min_k sd(s_ak) − r_ak − m)`` (1) [m]    the closest sphere's         solid (16), m, count, spheres
+``SPHERES``     ``min(0, min_ij ‖s_ai − s_bj‖ − r_ai − r_bj − m)``  the closest pair's          see below
+``SOLIDS``      ``min(0, min_k sd(s_ak) − r_ak − m)`` (1) [m]    the closest sphere's         see below
 ==============  ============================================  ==========================  =======================
 
 ``AXIS``: the frame axis ``e`` (frame coordinates) against a world direction ``d``; ``θ`` is the angle between
@@ -39,9 +39,13 @@ are the block's ``idx`` entries, ``m_k`` the mass fractions), on the axes of a 0
 ``SPHERES``: two bodies kept ``m`` apart through spheres fixed on them — on frames ``a`` and ``b`` (the bodies'
 joint frames), centres ``c`` in those frames, radii ``r``, listed in pairs — by the closest pair: one row, a hinge,
 whose Jacobian is the closest pair's (it switches pairs as the bodies move, like any distance between unions).
+Parameters: ``n_a, n_b, m``, each body's bounding sphere (centre in its frame, radius: 4 each), a flag (1: every
+pair of the two lists, 0: a 0/1 mask of the pairs follows the spheres), ``a``'s spheres and ``b``'s (centre,
+radius: 4 each), the mask (``n_a × n_b``, row-major).
 ``SOLIDS``: the spheres of frame ``a``'s body against one solid — a sphere, box, capsule or half-space
 (:data:`SOLID_SPHERE`, ...: a code, a rotation ``R`` and centre ``c``, dims; see :func:`solid_distance`) fixed in
-the world, or on frame ``b`` (a link's own box) — by the closest sphere.
+the world, or on frame ``b`` (a link's own box) — by the closest sphere. Parameters: the solid (16), ``m``, the
+count, the spheres' bounding sphere (4), the spheres (4 each).
 Both keep a collision term to one row per pair of bodies (or body and obstacle) however many spheres cover them.
 
 Layout of the block table ``bint (B, 11)`` (columns below) and ``bflt (B, 2)`` (weight, scale); parameters and
@@ -221,7 +225,7 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                         g -= u0 * Jf[fb, 0, i] + u1 * Jf[fb, 1, i] + u2 * Jf[fb, 2, i]
                 Jr[row, i] = g
     elif kind == SPHERES:
-        spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n)
+        spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, E9)
     elif kind == SOLIDS:
         solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, E9)
     elif kind == COORDINATES:
@@ -265,32 +269,71 @@ def _hinge_row(value, r, Jr, row, want_jacobian, n) -> bool:
     return want_jacobian and below
 
 
+@numba.njit(cache=True)
+def scratch_size(bint, params) -> int:
+    """Length of the blocks' scratch vector: 9 (a rotation), or three per sphere of the largest ``SPHERES``
+    block's second body (their world centres)."""
+    size = 9
+    for b in range(bint.shape[0]):
+        if bint[b, KIND] == SPHERES:
+            size = max(size, 3 * int(params[bint[b, PPTR] + 1]))
+    return size
+
+
 @numba.njit(cache=True, inline="always")
-def _sphere_pair(out, fa, fb, params, q):
-    """The offsets ``o_a = R_a c_a``, ``o_b = R_b c_b`` of a sphere pair's centres (``params[q:q + 8]``: ``c_a, r_a,
-    c_b, r_b``) on frames ``fa`` and ``fb``, and the vector between the centres in the world (9 scalars)."""
-    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-    b0, b1, b2 = _on_frame(out, fb, params[q + 4], params[q + 5], params[q + 6])
-    return (a0, a1, a2, b0, b1, b2, out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1,
-            out[fa, 11] + a2 - out[fb, 11] - b2)
+def _world_point(out, f, params, q):
+    """The world position (3 scalars) of the point ``params[q:q + 3]`` fixed in frame ``f``."""
+    o0, o1, o2 = _on_frame(out, f, params[q], params[q + 1], params[q + 2])
+    return out[f, 9] + o0, out[f, 10] + o1, out[f, 11] + o2
 
 
 @numba.njit(cache=True)
-def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n) -> None:
-    """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_k ‖(p_a + R_a c_ak) − (p_b + R_b c_bk)‖ − r_ak
-    − r_bk − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
-    ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame)."""
-    count, margin = int(params[p]), params[p + 1]
-    best, arg = 1e300, -1
-    for k in range(count):
-        q = p + 2 + 8 * k
-        _, _, _, _, _, _, v0, v1, v2 = _sphere_pair(out, fa, fb, params, q)
-        d = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2) - params[q + 3] - params[q + 7]
-        if d < best:
-            best, arg = d, k
-    if not _hinge_row(best - margin, r, Jr, row, want_jacobian, n):
+def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
+    """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_ij ‖(p_a + R_a c_ai) − (p_b + R_b c_bj)‖ − r_ai
+    − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
+    ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame).
+
+    Exact with two prunings: bodies whose bounding spheres are ``m`` apart are clear (every pair is at least that
+    far apart), and a sphere of ``a`` farther from ``b``'s bounding sphere than the closest pair found so far
+    is skipped. ``b``'s world centres go to the scratch ``S`` (3 per sphere), each computed once.
+    """
+    na, nb, margin = int(params[p]), int(params[p + 1]), params[p + 2]
+    A0, A1, A2 = _world_point(out, fa, params, p + 3)
+    B0, B1, B2 = _world_point(out, fb, params, p + 7)
+    RA, RB = params[p + 6], params[p + 10]
+    gap = np.sqrt((A0 - B0) ** 2 + (A1 - B1) ** 2 + (A2 - B2) ** 2) - RA - RB - margin
+    if gap >= 0.0:
+        _hinge_row(gap, r, Jr, row, want_jacobian, n)
         return
-    a0, a1, a2, b0, b1, b2, v0, v1, v2 = _sphere_pair(out, fa, fb, params, p + 2 + 8 * arg)
+    full = params[p + 11] != 0.0
+    qa = p + 12
+    qb = qa + 4 * na
+    qm = qb + 4 * nb
+    for j in range(nb):
+        S[3 * j], S[3 * j + 1], S[3 * j + 2] = _world_point(out, fb, params, qb + 4 * j)
+    best, ai, bj = margin, -1, -1  # only pairs closer than the margin count
+    for i in range(na):
+        a0, a1, a2 = _world_point(out, fa, params, qa + 4 * i)
+        ra = params[qa + 4 * i + 3]
+        if np.sqrt((a0 - B0) ** 2 + (a1 - B1) ** 2 + (a2 - B2) ** 2) - ra - RB >= best:
+            continue  # every sphere of b is at least this far
+        for j in range(nb):
+            if not full and params[qm + nb * i + j] == 0.0:
+                continue
+            reach = best + ra + params[qb + 4 * j + 3]  # a pair closer than best has ‖v‖ < reach
+            if reach <= 0.0:
+                continue
+            v0, v1, v2 = a0 - S[3 * j], a1 - S[3 * j + 1], a2 - S[3 * j + 2]
+            vv = v0 * v0 + v1 * v1 + v2 * v2
+            if vv < reach * reach:
+                best, ai, bj = np.sqrt(vv) - ra - params[qb + 4 * j + 3], i, j
+    if not _hinge_row(best - margin if ai >= 0 else 0.0, r, Jr, row, want_jacobian, n):
+        return
+    q, s = qa + 4 * ai, qb + 4 * bj
+    a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    b0, b1, b2 = _on_frame(out, fb, params[s], params[s + 1], params[s + 2])
+    v0, v1, v2 = out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1, \
+        out[fa, 11] + a2 - out[fb, 11] - b2
     norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
     if norm > 0.0:
         u0, u1, u2 = v0 / norm, v1 / norm, v2 / norm
@@ -328,17 +371,21 @@ def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g)
     frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
     sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
     margin, count = params[p + 16], int(params[p + 17])
+    C0, C1, C2 = _world_point(out, fa, params, p + 18)
+    gap = _solid_point_distance(out, fb, C0, C1, C2, params, p, g) - params[p + 21] - margin
+    if gap >= 0.0:  # the spheres' bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
+        _hinge_row(gap, r, Jr, row, want_jacobian, n)
+        return
     best, arg = 1e300, -1
     for k in range(count):
-        q = p + 18 + 4 * k
-        a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-        d = _solid_point_distance(out, fb, out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2, params, p, g) \
-            - params[q + 3]
+        q = p + 22 + 4 * k
+        a0, a1, a2 = _world_point(out, fa, params, q)
+        d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g) - params[q + 3]
         if d < best:
             best, arg = d, k
     if not _hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
-    q = p + 18 + 4 * arg
+    q = p + 22 + 4 * arg
     a0, a1, a2 = _on_frame(out, fa, params[q], params[q + 1], params[q + 2])
     s0, s1, s2 = out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2
     _solid_point_distance(out, fb, s0, s1, s2, params, p, g)

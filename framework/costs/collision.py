@@ -42,13 +42,26 @@ def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3
     return frame
 
 
+def bounding_sphere(centers: np.ndarray, radii: np.ndarray) -> np.ndarray:
+    """A sphere ``(centre (3), radius)`` holding the spheres ``centers (k, 3)``, ``radii (k,)``: centred on their
+    centres' bounding box."""
+    center = 0.5 * (centers.min(axis=0) + centers.max(axis=0))
+    return np.r_[center, (np.linalg.norm(centers - center, axis=1) + radii).max()]
+
+
 def _spheres_block(shape: RobotShape, cover: SphereCover, pairs: list[tuple[int, int]], margin: float) -> Block:
     """One ``SPHERES`` block over sphere pairs ``(i, j)`` of the cover, every ``i`` on one body, every ``j`` on
-    another."""
-    i0, j0 = pairs[0]
-    rows = [np.r_[cover.centers[i], cover.radii[i], cover.centers[j], cover.radii[j]] for i, j in pairs]
-    frames = (_body_frame(shape, cover.joints[i0]), _body_frame(shape, cover.joints[j0]))
-    return Block(B.SPHERES, B.NORM, 1, frames, np.concatenate([[len(pairs), margin], *rows]), tolerance=B.TOL_LINEAR)
+    another: each body's spheres listed once, the pairs as a mask unless they are all pairs of the two lists."""
+    a, b = sorted({i for i, _ in pairs}), sorted({j for _, j in pairs})
+    mask = np.zeros((len(a), len(b)))
+    mask[np.searchsorted(a, [i for i, _ in pairs]), np.searchsorted(b, [j for _, j in pairs])] = 1.0
+    full = bool(mask.all())
+    frames = (_body_frame(shape, cover.joints[a[0]]), _body_frame(shape, cover.joints[b[0]]))
+    params = [[len(a), len(b), margin], bounding_sphere(cover.centers[a], cover.radii[a]),
+              bounding_sphere(cover.centers[b], cover.radii[b]), [float(full)],
+              np.c_[cover.centers[a], cover.radii[a]].ravel(), np.c_[cover.centers[b], cover.radii[b]].ravel(),
+              [] if full else mask.ravel()]
+    return Block(B.SPHERES, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR)
 
 
 def _solids_block(shape: RobotShape, cover: SphereCover, spheres: list[int], solid: np.ndarray, margin: float,
@@ -56,10 +69,10 @@ def _solids_block(shape: RobotShape, cover: SphereCover, spheres: list[int], sol
     """One ``SOLIDS`` block: the cover's ``spheres`` (all on one body) against ``solid`` (16 parameters), fixed in
     the world or on ``solid_frame``."""
     body = _body_frame(shape, cover.joints[spheres[0]])
-    rows = [np.r_[cover.centers[k], cover.radii[k]] for k in spheres]
     frames = (body,) if solid_frame is None else (body, solid_frame)
-    return Block(B.SOLIDS, B.NORM, 1, frames, np.concatenate([solid, [margin, len(spheres)], *rows]),
-                 tolerance=B.TOL_LINEAR)
+    params = [solid, [margin, len(spheres)], bounding_sphere(cover.centers[spheres], cover.radii[spheres]),
+              np.c_[cover.centers[spheres], cover.radii[spheres]].ravel()]
+    return Block(B.SOLIDS, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR)
 
 
 def _margin(value: float, what: str) -> float:

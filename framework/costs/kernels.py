@@ -13,6 +13,7 @@ import numpy as np
 from ..kinematics import fk_one, frame_jacobians
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .blocks import (
+    KIND,
     LEVEL,
     LEVEL_REGULARIZER,
     LEVEL_TASK,
@@ -25,7 +26,9 @@ from .blocks import (
     TOL_LINEAR,
     WEIGHT,
     block_residual,
+    is_hinge,
     rho_value,
+    scratch_size,
 )
 
 # Arguments of compiled calls, as numpy scalars: numba compiles a callee once per *literal* Python int / bool it
@@ -41,8 +44,8 @@ ROW0 = np.int64(0)
 @numba.njit(cache=True)
 def workspace(kin, prog, n):
     """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
-    ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, two small matrices — as views of
-    one allocation."""
+    ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
+    scratch (:func:`~framework.costs.blocks.scratch_size`) — as views of one allocation."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
@@ -50,7 +53,7 @@ def workspace(kin, prog, n):
         rows += bint[b, ROWS]
     rows = max(rows, 1)
     k, J = fslot.shape[0], jint.shape[0]
-    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, 9)
+    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, scratch_size(bint, prog[2]))
     total = 0
     for size in sizes:
         total += size
@@ -67,7 +70,7 @@ def workspace(kin, prog, n):
     Jr = buffer[a : a + sizes[4]].reshape((rows, n))
     a += sizes[4]
     L3 = buffer[a : a + 9].reshape((3, 3))
-    E9 = buffer[a + 9 : a + 18]
+    E9 = buffer[a + 9 : a + 9 + sizes[6]]
     return out, W, Jf, r, Jr, L3, E9
 
 
@@ -78,7 +81,9 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     ``level < 0`` selects every block of level 1 and 2 (the task and the regularizers). ``kinematics``:
     0 reuses the poses and frame Jacobians in ``ws`` (computed at the same ``x``); 1 computes the poses (and,
     with ``want_jacobian``, the frame Jacobians); 2 keeps the poses and computes the frame Jacobians from them
-    (after a call with ``kinematics=1, want_jacobian=False`` at the same ``x``: a step that was accepted).
+    (after a call with ``kinematics=1, want_jacobian=False`` at the same ``x`` and level: a step that was accepted; the
+    hinge blocks that call found clear keep their zero residual and get a zero Jacobian without a second
+    evaluation — collision terms are mostly such rows).
     """
     jint, jgeo, fslot, fgeo = borrow_kin(kin)
     prog = borrow_prog(prog)
@@ -94,8 +99,21 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
         lv = bint[b, LEVEL]
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
             continue
+        if kinematics == 2 and is_hinge(bint[b, KIND]) and _clear(r, row, bint[b, ROWS]):
+            Jr[row : row + bint[b, ROWS], :] = 0.0  # clear at x in the previous call: nothing to recompute
+            row += bint[b, ROWS]
+            continue
         row += block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9)
     return row
+
+
+@numba.njit(cache=True, inline="always")
+def _clear(r, row, rows) -> bool:
+    """Whether the residual rows ``r[row:row + rows]`` are all zero."""
+    for c in range(row, row + rows):
+        if r[c] != 0.0:
+            return False
+    return True
 
 
 @numba.njit(cache=True)
