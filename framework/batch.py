@@ -134,8 +134,10 @@ def solve_batch(
                         kwargs, bar)
     angular = np.array(program.task_angular, dtype=bool)
     limits = np.where(angular, template.angle_tolerance, template.tolerance)
+    if problem.checks_collisions:  # as solve does: the exact check has the last word, not the sphere rows
+        limits[np.array(program.task_checked_exactly, dtype=bool)] = np.inf
     success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
-    if problem.checks_collisions:  # as solve does: no contact on the exact geometry
+    if problem.checks_collisions:  # no contact on the exact geometry
         for i in np.flatnonzero(success):
             success[i] = not problem.collisions(state.X[i]).colliding
     return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,

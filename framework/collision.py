@@ -103,6 +103,7 @@ class RobotShape:
         if always > 0:
             self._remove_always_colliding(always)
         self._covers: dict[tuple, SphereCover] = {}
+        self._hulls: dict[int, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
@@ -188,6 +189,22 @@ class RobotShape:
             out[g.name] = (int(g.parentJoint), g.placement, np.concatenate([[solid], np.eye(3).ravel(), np.zeros(3),
                                                                               dims]), volume)
         return out
+
+    def hull(self, index: int):
+        """The convex coal geometry of geometry object ``index``: a mesh's convex hull (built once, qhull), a
+        primitive as it is. It holds the geometry: hulls apart mean the geometries are."""
+        import coal
+
+        hull = self._hulls.get(index)
+        if hull is None:
+            geometry = self.geometry.geometryObjects[index].geometry
+            if isinstance(geometry, coal.BVHModelBase):
+                geometry = geometry.clone()  # the exact check keeps its own mesh untouched
+                geometry.buildConvexHull(False, "Qt")
+                geometry = geometry.convex
+            geometry.computeLocalAABB()
+            hull = self._hulls[index] = geometry
+        return hull
 
     def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData]:
         """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the

@@ -5,7 +5,7 @@ the warm start, a metaheuristic's global phase when that misses; ``"multistart_l
 registered metaheuristic), runs it and reports an :class:`IKResult`. Success is strict: every task term within
 its tolerance in its own unit — positions and relative positions within ``tolerance`` [m], orientations within
 ``angle_tolerance`` [rad] (default: the same number) — and, when the problem has collision terms, no contact on the
-exact geometry.
+exact geometry (that check, not the terms' sphere rows, decides: spheres are fatter than the links).
 """
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ class IKResult:
             positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``; a
             collision term its deepest sphere overlap [m]).
         success: every entry of ``errors`` within its tolerance and, with collision terms, no contact in
-            ``collisions`` (never after an interruption).
+            ``collisions`` — the collision terms' own entries (sphere overlaps) are not asked: the exact check
+            decides (never after an interruption).
         stop_reason: why the solver stopped (``tolerance``, ``max_iterations``, ``time_budget``, ``stagnation``,
             ``local_minimum``, ``interrupted``, ...).
         iterations, evaluations: solver iterations and cost / residual evaluations.
@@ -201,11 +202,12 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     if errors is None:
         errors = program.task_errors(x)
     error_list = errors.tolist()
-    # an interrupted solve is never a success, whatever its last point (the user stopped it before its end)
-    success = outcome.stop_reason != "interrupted" and program.within(error_list, request.tolerance,
-                                                                       request.angle_tolerance)
+    # an interrupted solve is never a success, whatever its last point (the user stopped it before its end);
+    # with collision terms the exact check has the last word, not their sphere rows
     collisions = problem.collisions(x)
-    success = success and (collisions is None or not collisions.colliding)
+    success = outcome.stop_reason != "interrupted" and program.within(
+        error_list, request.tolerance, request.angle_tolerance, exact_checked=collisions is not None) \
+        and (collisions is None or not collisions.colliding)
     layout = program.layout
     return IKResult(
         configuration=x,

@@ -34,6 +34,7 @@ from .program import Block, Program, unique_labels
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..collision import CollisionReport
+    from ..hulls import HullPair
 
 LEVELS = ("task", "regularizer", "value")
 
@@ -114,6 +115,11 @@ class Term:
         """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; the
         collision terms answer with coal on the exact geometry, and a solve is a success only without contacts)."""
         return None
+
+    def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
+        """The pairs of convex hulls this term keeps apart (:mod:`framework.hulls`; the collision terms' tighter
+        model for the engine's last steps), none for other terms."""
+        return ()
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""

@@ -7,7 +7,8 @@ distance to the solid), so a term has one row per pair of bodies however many sp
 solver reads them through the one term interface. Links' boxes and capsules are used whole on one side of a pair
 because few spheres cover a flat box badly. They sit at the first priority level with the task: a collision is as wrong as a
 missed target. Each term also has an exact check (:meth:`Term.collisions`, coal on the URDF's geometry), which
-:func:`framework.solve` asks before it calls a solve a success.
+decides a solve's success (not the sphere rows), and its pairs as convex hulls (:meth:`Term.hull_pairs`), on which
+the engine takes its last steps when the fatter spheres keep it from the task.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pinocchio as pin
 
 from ..collision import CollisionReport, RobotShape
 from ..errors import TaskError
+from ..hulls import HullPair, obstacle_pairs, self_pairs
 from ..robot import Robot
 from ..scene import Scene
 from ..spheres import SphereCover
@@ -112,6 +114,11 @@ class SelfCollision(Term):
         """The robot's own pairs in contact at ``x`` on the exact geometry (coal's fast check)."""
         return self.shape.check(x, distances=False)
 
+    def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
+        """Every checked pair of the robot's own geometries, as convex hulls (those included that the sphere
+        rows leave to the exact check)."""
+        return self_pairs(self.shape, self.margin)
+
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
         other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
@@ -185,6 +192,10 @@ class Obstacles(Term):
         """The moving geometries in contact with the obstacles at ``x``, on the exact geometry (coal's fast
         check)."""
         return self.shape.check(x, scene=self.scene, self_pairs=False, distances=False)
+
+    def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
+        """Every moving geometry's convex hull against every obstacle."""
+        return obstacle_pairs(self.shape, self.scene, self.margin)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are

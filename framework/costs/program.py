@@ -20,6 +20,7 @@ from . import blocks as B
 from .kernels import population_cost, population_values, task_errors_at
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..hulls import HullPair
     from .base import Objective, Term
 
 _LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_REGULARIZER}
@@ -147,6 +148,7 @@ class _Layout:
         self.task_terms = tuple(k for k, level in enumerate(levels) if level == B.LEVEL_TASK)
         self._bflt: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
+        self.task_checked_exactly = tuple(bool(terms[k].checks_collisions) for k in self.block_term[task].tolist())
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
 
@@ -185,7 +187,7 @@ class Program:
         params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
         self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
-        self.task_angular = layout.task_angular
+        self.task_angular, self.task_checked_exactly = layout.task_angular, layout.task_checked_exactly
         self.task_rows, self.task_blocks = layout.task_rows, layout.task_blocks
         self.term_kinds = layout.term_kinds
         self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
@@ -213,13 +215,20 @@ class Program:
             task_errors_at(np.ascontiguousarray(x, dtype=float), self.kin, self.prog, errors)
         return errors
 
-    def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float) -> bool:
+    def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float, *,
+               exact_checked: bool = False) -> bool:
         """Whether every task block's error (block order, from :meth:`task_errors`) is within
-        ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others."""
-        for e, angular in zip(errors, self.task_angular):
-            if e > (angle_tolerance if angular else tolerance):
+        ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others; with ``exact_checked``
+        (the exact collision check has the last word) the collision terms' sphere rows are not asked."""
+        for e, angular, exact in zip(errors, self.task_angular, self.task_checked_exactly):
+            if e > (angle_tolerance if angular else tolerance) and not (exact_checked and exact):
                 return False
         return True
+
+    @cached_property
+    def hull_pairs(self) -> tuple[HullPair, ...]:
+        """The convex-hull pairs the collision terms keep apart (:meth:`Term.hull_pairs`), built once."""
+        return tuple(p for t in self.terms for p in t.hull_pairs(self.robot))
 
     def reference(self, x: np.ndarray) -> bool:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they

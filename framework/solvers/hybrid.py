@@ -8,6 +8,9 @@
 2. If that misses the task, a short global phase of a metaheuristic (``cmaes_fast``, 30 generations) from a
    uniform start picks another point for the engine (the better of the two is kept). An explicit
    ``global_iterations`` runs the global phase first instead.
+   Whenever the engine ends short of the task with a collision term's sphere rows active, its last steps are
+   taken again on the links' convex hulls (:func:`framework.engine.hull_reach.hull_reach`): the spheres are
+   fatter than the links, the hulls hold them tightly, and the exact check decides success anyway.
 3. For a weighted objective (``Problem.priorities`` false, the papers' sums), a point on the task is kept only
    if it also minimizes the weighted sum: when the task's multipliers say that leaving the task lowers the sum
    (weights too small for reaching to pay), the task terms that do not pay for themselves are released into
@@ -25,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
 from .metaheuristic import compiled_or_loop, shared_loop, within
@@ -125,18 +129,30 @@ class Hybrid(IKSolver):
         def better(a, b):  # the engine result that reaches the task, else the lower cost
             return min((a, b), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
 
+        def hulls(result):  # the sphere rows kept it from the task: the last steps on the links' convex hulls
+            nonlocal iterations, evaluations
+            if result.reached or not blocked_by_spheres(problem.program, result.task_errors) \
+                    or request.time_left() <= 0:
+                return result
+            hulled = hull_reach(problem.program, result.x, settings, deadline=request.deadline)
+            if hulled is None:
+                return result
+            iterations, evaluations = iterations + hulled.iterations, evaluations + hulled.evaluations
+            counter.report(hulled.x)
+            return hulled if hulled.reached else result
+
         escalated = False
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
         if start == "middle" or not o.restarts:
-            best = engine(x0)
+            best = hulls(engine(x0))
         else:  # a warm start's basin first (a slow descent near a singularity is not a reason to leave it) ...
-            best = engine(x0, _in_basin(settings))
+            best = hulls(engine(x0, _in_basin(settings)))
             if not best.reached and request.time_left() > 0:  # ... then random restarts
-                best = better(best, engine(x0))
+                best = better(best, hulls(engine(x0)))
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
-            cold = engine(global_phase(None, GLOBAL_ITERATIONS))
+            cold = hulls(engine(global_phase(None, GLOBAL_ITERATIONS)))
             best = better(best, cold)
         x, errors, values, weighted = best.x, best.task_errors, best.values, False
         if not problem.priorities and (not best.reached or not reaching_is_optimal(problem.program, x,

@@ -1,0 +1,194 @@
+"""The engine's last steps for collision terms: Levenberg-Marquardt on the task with every pair a collision term
+keeps apart measured between convex hulls (:mod:`framework.hulls`) instead of sphere covers.
+
+Run when the compiled engine ends short of the task with collision rows active: the sphere model, fatter than the
+links, may leave no room where the links have some (a hand a few millimetres above a table). A Python loop, for
+the few solves that need it: the rows of the other task terms come from the compiled kernel; each pair within
+reach gives coal's signed distance ``d`` between the hulls, witness points ``p_a``, ``p_b`` and normal ``n``
+(from ``a`` to ``b``), the hinge row ``min(0, d − m − BUFFER)`` and its Jacobian ``n·(v_b(p_b) − v_a(p_a))``,
+``v(p) = J_p + ω × (p − o)`` of the body's frame. Pairs whose hulls are within the margin at the start (links
+nested in each other's hull) have no row: the exact check, which decides success, still holds them.
+"""
+
+from __future__ import annotations
+
+import copy
+import time
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+
+from ..costs import Objective, Program
+from ..hulls import HullPair
+from .local import LocalResult, LocalSettings, residuals, search_box
+from .reach import project
+
+#: Distance kept beyond the margin [m]: a hull pair exactly at the margin reads as touching in coal's check.
+BUFFER = 1e-4
+#: Pairs whose bounding spheres are farther apart than the margin plus this [m] are not measured.
+REACH = 0.05
+#: Levenberg-Marquardt damping: start (relative to ``‖r‖²``), factors, and the damping that gives up.
+DAMPING_START, DAMPING_UP, DAMPING_DOWN, DAMPING_MAX = 1e-3, 10.0, 0.3, 1e12
+#: Iterations without lowering ``‖r‖²`` by 10 % after which the descent gives up (a minimum off the task).
+STALL = 12
+
+
+class _Rows(NamedTuple):
+    r: np.ndarray  # (m,) task rows, then the active hinge rows
+    J: np.ndarray  # (m, n)
+    deepest: float  # the smallest d − m − BUFFER over the pairs measured (inf: none)
+
+
+class HullRows:
+    """The hull pairs of a problem with their body frames and bounding spheres, measured at a configuration."""
+
+    def __init__(self, program: Program, pairs: tuple[HullPair, ...]):
+        import coal
+
+        robot = program.robot
+        self.robot = robot
+        joints = sorted({j for p in pairs for j in p.joints if j})
+        self.frames = tuple(f"body[{robot.model.names[j]}]" for j in joints)
+        for name, j in zip(self.frames, joints):
+            robot.add_frame(name, j, pin.SE3.Identity())
+        slot = {j: k for k, j in enumerate(joints)}
+        self.request, self.result = coal.DistanceRequest(), coal.DistanceResult()
+        self.distance, self.transform = coal.distance, coal.Transform3s
+        self._keep(pairs, slot)
+
+    def _keep(self, pairs, slot) -> None:
+        """Tables of the pairs kept: each side's frame slot (-1: the world), placement, bounding centre."""
+        self.pairs = list(pairs)
+        self.slots = np.array([[slot.get(j, -1) for j in p.joints] for p in pairs], dtype=np.int64).reshape(-1, 2)
+        self.R = np.array([[pl.rotation for pl in p.placements] for p in pairs]).reshape(-1, 2, 3, 3)
+        self.t = np.array([[pl.translation for pl in p.placements] for p in pairs]).reshape(-1, 2, 3)
+        self.c = np.array([[s.aabb_center for s in p.shapes] for p in pairs], dtype=float).reshape(-1, 2, 3)
+        self.reach = np.array([p.shapes[0].aabb_radius + p.shapes[1].aabb_radius + p.margin for p in pairs]) + REACH
+        self._slot = slot
+
+    def _placements(self, positions, rotations):
+        """World rotations ``(P, 2, 3, 3)`` and origins ``(P, 2, 3)`` of every pair's two solids."""
+        Rj = np.concatenate([rotations, np.eye(3)[None]])[self.slots]  # slot -1: the world
+        pj = np.concatenate([positions, np.zeros((1, 3))])[self.slots]
+        return Rj @ self.R, pj + np.einsum("pkij,pkj->pki", Rj, self.t)
+
+    def _near(self, x: np.ndarray):
+        """Frame poses and Jacobians at ``x``, every pair's solids in the world, and the pairs within reach."""
+        poses, J = self.robot.frame_jacobians(x[None], self.frames)
+        positions, rotations = poses.positions[0], poses.rotations[0]
+        R, t = self._placements(positions, rotations)
+        centres = t + np.einsum("pkij,pkj->pki", R, self.c)
+        near = np.flatnonzero(np.linalg.norm(centres[:, 0] - centres[:, 1], axis=1) <= self.reach)
+        return positions, J[0], R, t, near.tolist()
+
+    def _height(self, k: int, R: np.ndarray, t: np.ndarray) -> float:
+        """``d − m − BUFFER`` of pair ``k`` (coal's witness points and normal left in ``self.result``)."""
+        pair = self.pairs[k]
+        self.result.clear()
+        d = self.distance(pair.shapes[0], self.transform(R[k, 0], t[k, 0]), pair.shapes[1],
+                          self.transform(R[k, 1], t[k, 1]), self.request, self.result)
+        return d - pair.margin - BUFFER
+
+    def measure(self, x: np.ndarray, n: int) -> tuple[float, list[float], list[np.ndarray]]:
+        """At ``x``: the smallest ``d − m − BUFFER`` over the pairs (inf: none within reach) and, for the pairs
+        below zero, their values and Jacobian rows ``(n,)``."""
+        positions, J, R, t, near = self._near(x)
+        values, gradients, deepest = [], [], np.inf
+        for k in near:
+            h = self._height(k, R, t)
+            deepest = min(deepest, h)
+            if h >= 0:
+                continue
+            normal = np.asarray(self.result.normal, dtype=float)
+            g = np.zeros(n)
+            for side, point, sign in ((0, self.result.getNearestPoint1(), -1.0),
+                                      (1, self.result.getNearestPoint2(), 1.0)):
+                s = self.slots[k, side]
+                if s >= 0:
+                    g += sign * (normal @ J[s, :3] - np.cross(normal, point - positions[s]) @ J[s, 3:])
+            values.append(h)
+            gradients.append(g)
+        return deepest, values, gradients
+
+    def subset(self, indices: list[int]) -> HullRows:
+        """The same rows over the pairs ``indices`` only."""
+        other = copy.copy(self)
+        other._keep([self.pairs[k] for k in indices], self._slot)
+        return other
+
+    def keep_clear_at(self, x: np.ndarray) -> None:
+        """Drop the pairs already within their margin at ``x`` (nested hulls: left to the exact check)."""
+        _, _, R, t, near = self._near(x)
+        inside = {k for k in near if self._height(k, R, t) < 0}
+        self._keep([p for k, p in enumerate(self.pairs) if k not in inside], self._slot)
+
+
+def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
+    """Whether a collision term's sphere rows are active among the task errors ``(blocks,)`` of ``program`` (and it
+    has hull pairs to try instead)."""
+    return any(e > 0 for e, exact in zip(task_errors.tolist(), program.task_checked_exactly) if exact) \
+        and bool(program.hull_pairs)
+
+
+def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
+               deadline: float | None = None, max_iterations: int = 200) -> LocalResult | None:
+    """Reach the task from ``x0`` with the collision terms' pairs measured between convex hulls; ``None`` when
+    the problem has no such pairs or no other task term. ``reached``: every other task block within its
+    tolerance and every hull pair at least its margin apart."""
+    if not program.hull_pairs:
+        return None
+    robot = program.robot
+    task = Program(robot, Objective(tuple((w, t) for w, t in zip(program.weight_list, program.terms)
+                                          if t.is_task and not t.checks_collisions)))
+    if not task.task_rows:
+        return None
+    pairs = HullRows(program, program.hull_pairs)
+    lower, upper, box_wrap = search_box(program)
+    x = np.array(x0, dtype=float)
+    project(x, lower, upper, box_wrap)
+    pairs.keep_clear_at(x)
+    n = x.size
+
+    def rows(x: np.ndarray) -> _Rows:
+        r, J = residuals(task, x)
+        deepest, values, gradients = pairs.measure(x, n)
+        if values:
+            r, J = np.concatenate([r, values]), np.vstack([J, gradients])
+        return _Rows(r, J, deepest)
+
+    def reached(x: np.ndarray, at: _Rows) -> bool:
+        return at.deepest >= 0 and task.within(task.task_errors(x).tolist(), settings.tolerance, settings.angular)
+
+    current = rows(x)
+    e = float(current.r @ current.r)
+    damping, iterations, evaluations = DAMPING_START * e, 0, 1
+    checkpoint, since = e, 0
+    done = reached(x, current)
+    while not done and iterations < max_iterations and damping < DAMPING_MAX and since < STALL:
+        if deadline is not None and time.monotonic() >= deadline:
+            break
+        iterations += 1
+        since += 1
+        if e < 0.9 * checkpoint:
+            checkpoint, since = e, 0
+        A = current.J.T @ current.J
+        A[np.diag_indices(n)] += damping
+        try:
+            dx = np.linalg.solve(A, -current.J.T @ current.r)
+        except np.linalg.LinAlgError:
+            damping *= DAMPING_UP
+            continue
+        xt = x + dx
+        project(xt, lower, upper, box_wrap)
+        trial = rows(xt)
+        evaluations += 1
+        et = float(trial.r @ trial.r)
+        if et < e:
+            x, current, e = xt, trial, et
+            damping = max(damping * DAMPING_DOWN, 1e-12)
+            done = reached(x, current)
+        else:
+            damping *= DAMPING_UP
+    status = "reached" if done else "max_iterations"
+    return LocalResult(x, done, status, program.task_errors(x), iterations, evaluations, 0)

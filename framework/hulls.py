@@ -1,0 +1,72 @@
+"""Convex hulls of a robot's collision geometry, paired as a collision term keeps them apart: the tighter model of
+the local engine's last steps (:mod:`framework.engine.hull_reach`).
+
+A sphere cover is fatter than its link — centimetres on a large mesh — so a target a few millimetres above a
+table can be out of reach in the sphere model although a configuration reaches it without contact. A convex hull
+holds its mesh (hulls apart mean the meshes are) and is the mesh itself on the convex links robots are mostly made
+of; coal measures two hulls, or a hull and a box, capsule or sphere, in microseconds (GJK), with the depth of an
+overlap (EPA), so a hinge on their distance has a gradient on both sides.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .collision import RobotShape
+from .scene import Scene
+
+
+@dataclass(frozen=True)
+class HullPair:
+    """Two convex solids kept ``margin`` [m] apart, each fixed on a joint (0: the world).
+
+    Attributes:
+        names: the geometries' names (an obstacle's as ``obstacle:<name>``).
+        joints: Pinocchio joint indices.
+        placements: each solid's placement in its joint's frame (in the world for joint 0).
+        shapes: coal geometries (a mesh's convex hull; primitives and obstacle meshes as they are), with their
+            local bounding spheres computed (``aabb_center``, ``aabb_radius``).
+        margin: distance to keep [m].
+    """
+
+    names: tuple[str, str]
+    joints: tuple[int, int]
+    placements: tuple[pin.SE3, pin.SE3]
+    shapes: tuple[Any, Any]
+    margin: float
+
+
+def self_pairs(shape: RobotShape, margin: float, skip: frozenset[tuple[str, str]] = frozenset()
+               ) -> tuple[HullPair, ...]:
+    """The robot's own checked pairs (:attr:`RobotShape.pairs`) but ``skip``, as hulls."""
+    objects = shape.geometry.geometryObjects
+    out = []
+    for p in shape.geometry.collisionPairs:
+        a, b = objects[p.first], objects[p.second]
+        if (a.name, b.name) in skip:
+            continue
+        out.append(HullPair((a.name, b.name), (int(a.parentJoint), int(b.parentJoint)), (a.placement, b.placement),
+                            (shape.hull(p.first), shape.hull(p.second)), margin))
+    return tuple(out)
+
+
+def obstacle_pairs(shape: RobotShape, scene: Scene, margin: float) -> tuple[HullPair, ...]:
+    """Every geometry that moves (not fixed to the world) against every obstacle of ``scene``."""
+    out = []
+    for obstacle in scene:
+        solid, placement = obstacle.coal()
+        solid.computeLocalAABB()
+        for k, g in enumerate(shape.geometry.geometryObjects):
+            if g.parentJoint != 0:
+                out.append(HullPair((g.name, f"obstacle:{obstacle.name}"), (int(g.parentJoint), 0),
+                                    (g.placement, placement), (shape.hull(k), solid), margin))
+    return tuple(out)
+
+
+def bounding_radius(shape: Any) -> tuple[np.ndarray, float]:
+    """A coal geometry's bounding sphere in its own frame: ``(centre (3,), radius)`` [m]."""
+    return np.asarray(shape.aabb_center, dtype=float), float(shape.aabb_radius)
