@@ -34,6 +34,7 @@ from .batch import BatchResult, solve_batch
 from .collision import CollisionReport, Contact, RobotShape
 from .scene import Box, Capsule, Mesh, Plane, Scene, Sphere
 from .solvers import solver_names
+from .fabrik import solver as _mfabrik_solver  # noqa: F401  registers "mfabrik" (paper 003) with the solvers
 
 __version__ = "0.1.0"
 

@@ -34,15 +34,17 @@ class Fabrik:
 
     Args:
         chain: the chain, from :meth:`PlanarChain.from_robot`.
+        reach: the chain's reach table (default: sampled here, :meth:`ReachTable.from_chain`).
         window, restarts, seed: stall detection and restarts (:class:`~framework.fabrik.progress.Progress`); new
             arm shapes are drawn from ``numpy.random.default_rng(seed)``, so a solve is deterministic.
     """
 
-    def __init__(self, chain: PlanarChain, *, window: int = 10, restarts: int = 10, seed: int = 0) -> None:
+    def __init__(self, chain: PlanarChain, *, window: int = 10, restarts: int = 10, seed: int = 0,
+                 reach: ReachTable | None = None) -> None:
         self.chain = chain
         self.robot = chain.robot
         self.links = Links.of(chain)
-        self.reach = ReachTable.from_chain(chain)
+        self.reach = ReachTable.from_chain(chain) if reach is None else reach
         self.window = window
         self.restarts = restarts
         self.seed = seed

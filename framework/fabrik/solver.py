@@ -1,0 +1,121 @@
+"""``mfabrik``: paper 003's M-FABRIK (and FABRIK for a fixed base) as a solver of the framework.
+
+``solve(problem, "mfabrik")`` takes a reach problem: one :class:`~framework.costs.Position` task term (the
+end-effector's position), optionally an :class:`~framework.costs.Obstacles` term, whose scene's floor shadows are
+M-FABRIK's obstacles (:meth:`Environment.from_scene`, the one scene description), and regularizers (``Motion``),
+which the method does not minimize but the result reports like any term's value. A robot with a mobile base (the
+``"base"`` group, ``x, y, θ``) is solved by M-FABRIK (Algorithm 1: base and arm), a fixed-base arm by FABRIK. It
+starts from the warm start, else the regularizers' reference, else the box middle, and returns the common
+:class:`~framework.solve.IKResult`; ``tracking.track`` drives it along paths as any solver. What is
+M-FABRIK-specific (chains, reach tables, regions, Algorithm 2) stays in this subpackage; the chain and reach table
+of a frame are built once per robot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..costs import Obstacles, Position
+from ..errors import SolverError
+from ..solvers.ik import IKSolver, Outcome, Request
+from ..solvers.multistart import start_configuration
+from ..solvers.registry import register_ik
+
+#: Iterations when the request names none (M-FABRIK's and FABRIK's own default).
+DEFAULT_ITERATIONS = 1000
+#: ReachResult reasons -> the framework's stop reasons.
+_STOP = {"converged": "tolerance", "max_iterations": "max_iterations", "stalled": "stagnation"}
+
+
+@dataclass(frozen=True)
+class MFabrikOptions:
+    """Options of ``mfabrik``.
+
+    Attributes:
+        orientation: how M-FABRIK turns the base: ``"follow_joint1"`` (paper 003's path experiment),
+            ``"face_target"`` or ``"fixed"`` (:class:`~framework.fabrik.BaseOrientation`).
+        base_margin: distance [m] the base's reference point keeps from the obstacles' shadows (paper 003: 0.2).
+        window: iterations without progress before a restart (``None``: the method's own, 4 for M-FABRIK, 10 for
+            FABRIK); restarts: restarts from new arm shapes.
+    """
+
+    orientation: str = "follow_joint1"
+    base_margin: float = 0.2
+    window: int | None = None
+    restarts: int = 10
+
+    def __post_init__(self) -> None:
+        from .mobile import BaseOrientation
+
+        known = [o.value for o in BaseOrientation]
+        if self.orientation not in known:
+            raise SolverError(f"mfabrik orientation must be one of {known}; got {self.orientation!r}")
+        if not (isinstance(self.base_margin, (int, float)) and 0 <= self.base_margin < np.inf):
+            raise SolverError(f"mfabrik base_margin must be a distance >= 0 [m]; got {self.base_margin!r}")
+        for name in ("window", "restarts"):
+            value = getattr(self, name)
+            if value is None and name == "window":
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < (1 if name == "window" else 0):
+                raise SolverError(f"mfabrik {name} must be an integer >= {1 if name == 'window' else 0}; "
+                                  f"got {value!r}")
+
+
+def reach_task(problem) -> tuple[Position, Obstacles | None]:
+    """The Position task term and the Obstacles term (or None) of a reach problem; a :class:`SolverError` naming
+    what M-FABRIK cannot take otherwise."""
+    positions = [t for _, t in problem.objective if isinstance(t, Position)]
+    obstacles = [t for _, t in problem.objective if isinstance(t, Obstacles)]
+    others = [t.name for _, t in problem.objective if t.is_task and not isinstance(t, (Position, Obstacles))]
+    if len(positions) != 1 or others or len(obstacles) > 1:
+        raise SolverError("mfabrik solves reach problems: one Position task term, optionally one Obstacles term "
+                          f"(and regularizers); this problem's task terms are "
+                          f"{[t.name for _, t in problem.objective if t.is_task]}")
+    return positions[0], (obstacles[0] if obstacles else None)
+
+
+@register_ik("mfabrik")
+class MFabrikSolver(IKSolver):
+    """M-FABRIK for a mobile base, FABRIK for a fixed one, behind the common interface."""
+
+    reference = "paper 003 (M-FABRIK, Algorithm 1); Aristidou & Lasenby 2011 (FABRIK) for fixed bases"
+    Options = MFabrikOptions
+
+    def solve(self, problem, request: Request) -> Outcome:
+        if request.deadline is not None or request.callback is not None:
+            raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")
+        position, obstacles = reach_task(problem)
+        x0, start = start_configuration(problem, request, True)
+        method, planner = self._planner(problem.robot, position.frame, obstacles, request.seed)
+        result = planner.solve(position.target, x0, tolerance=request.tolerance,
+                               max_iterations=request.max_iterations or DEFAULT_ITERATIONS)
+        stop = _STOP.get(result.reason, "unreachable")
+        settings = {**self.options.__dict__, "method": method, "start": start, "reason": result.reason,
+                    "max_iterations": request.max_iterations or DEFAULT_ITERATIONS}
+        return Outcome(result.configuration, stop, result.iterations, result.iterations,
+                       history=None, settings=settings, state={"base_path": result.base_path})
+
+    def _planner(self, robot, frame: str, obstacles: Obstacles | None, seed: int):
+        """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot."""
+        from .chain import PlanarChain
+        from .environment import Environment
+        from .fabrik import Fabrik
+        from .mfabrik import MFabrik
+        from .mobile import MobileArm
+        from .reach import ReachTable
+
+        o = self.options
+        window = {} if o.window is None else {"window": o.window}
+        if "base" in robot.groups and robot.group("base").size == 3:
+            arm = robot.memo(("mfabrik arm", frame), lambda: MobileArm.from_robot(robot, frame))
+            environment = None if obstacles is None else Environment.from_scene(obstacles.scene, margin=o.base_margin)
+            return "m-fabrik", MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, seed=seed,
+                                       **window)
+        if obstacles is not None:
+            raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
+                              "for a mobile base only")
+        chain = robot.memo(("fabrik chain", frame), lambda: PlanarChain.from_robot(robot, frame))
+        reach = robot.memo(("fabrik reach", frame), lambda: ReachTable.from_chain(chain))
+        return "fabrik", Fabrik(chain, restarts=o.restarts, seed=seed, reach=reach, **window)
