@@ -15,8 +15,9 @@ and no contact (self or table) by coal — collision-free solutions exist by con
 
 Success: every position and orientation within 1e-6 m / 1e-6 rad AND no contact on the exact geometry (coal: the
 youBot's collision spheres and box, PR2's meshes) among the pairs the row names, checked afterwards here, for
-every variant. Times: the solve only (the
-problem is built before; building one packs the collision blocks, see the table), default hybrid, seeds 0, 1, ...
+every variant. Times: the solve only (the problem is built before; building one packs the collision blocks, see
+the table), default hybrid, seeds 0, 1, ... "Answers on hulls": solves whose answer came from the engine's last
+steps on the links' convex hulls (taken when the sphere rows, fatter than the links, kept it from the task).
 
 (c) Paper 000's circular path tracked with and without a table placed where the unconstrained solution's platform
 stands (``tasks/paper000_circular_table.toml``): points in contact, by coal.
@@ -43,6 +44,8 @@ from two_hands import HANDS as PR2_HANDS  # noqa: E402
 from two_hands import pr2 as load_pr2  # noqa: E402
 
 import framework as fw  # noqa: E402
+from framework.costs.blocks import ROWS  # noqa: E402
+from framework.costs.kernels import TASK, residuals_at  # noqa: E402
 from framework.taskfile import load_task  # noqa: E402
 from tests.conftest import example_robot_data_dir  # noqa: E402
 
@@ -67,17 +70,23 @@ def _timed(problem: fw.Problem, seed: int) -> tuple[fw.IKResult, float]:
     return result, time.perf_counter() - t
 
 
-def _row(label: str, rows: list[tuple[bool, bool, float]]) -> str:
-    ok = np.array([a and b for a, b, _ in rows])
-    task = np.array([a for a, _, _ in rows])
-    clear = np.array([b for _, b, _ in rows])
-    ms = 1e3 * np.array([t for _, _, t in rows])
+def _on_hulls(result: fw.IKResult) -> bool:
+    """Whether the answer came from the engine's last steps on convex hulls (the sphere rows had blocked it)."""
+    return bool(result.settings.get("on_hulls", False))
+
+
+def _row(label: str, rows: list[tuple[bool, bool, float, bool]]) -> str:
+    ok = np.array([a and b for a, b, _, _ in rows])
+    task = np.array([a for a, _, _, _ in rows])
+    clear = np.array([b for _, b, _, _ in rows])
+    ms = 1e3 * np.array([t for _, _, t, _ in rows])
+    hulls = sum(h for *_, h in rows)
     return (f"| {label} | {len(rows)} | {100 * task.mean():.1f} | {100 * clear.mean():.1f} | {100 * ok.mean():.1f} | "
-            f"{np.median(ms):.2f} | {np.percentile(ms, 95):.2f} |")
+            f"{hulls} | {np.median(ms):.2f} | {np.percentile(ms, 95):.2f} |")
 
 
-HEADER = ["| solve | targets | task met % | no contact % | success % (both) | median ms | p95 ms |",
-          "|---|---:|---:|---:|---:|---:|---:|"]
+HEADER = ["| solve | targets | task met % | no contact % | success % (both) | answers on hulls | median ms | p95 ms |",
+          "|---|---:|---:|---:|---:|---:|---:|---:|"]
 
 
 def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
@@ -106,7 +115,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
         free, coll = problems(t1, t2)
         for problem, rows in ((free, rows_free), (coll, rows_coll)):
             result, seconds = _timed(problem, k)
-            rows.append((*_strictly(problem, result, shape, None), seconds))
+            rows.append((*_strictly(problem, result, shape, None), seconds, _on_hulls(result)))
     paper = [_row("paper 000 targets, unconstrained", rows_free), _row("paper 000 targets, SelfCollision", rows_coll)]
     kept_free, kept_coll, tries, build = [], [], 0, []
     while len(kept_coll) < count and tries < 50 * count:
@@ -121,10 +130,10 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
         within, clear = _strictly(free, result, shape, None)
         if clear:  # the unconstrained optimum is collision-free: not a target that tests the terms
             continue
-        kept_free.append((within, clear, seconds))
+        kept_free.append((within, clear, seconds, _on_hulls(result)))
         build += timing
         result, seconds = _timed(coll, tries)
-        kept_coll.append((*_strictly(coll, result, shape, None), seconds))
+        kept_coll.append((*_strictly(coll, result, shape, None), seconds, _on_hulls(result)))
     lines += HEADER + paper + [_row("random targets the unconstrained solve collides on, unconstrained", kept_free),
                                _row("the same targets, SelfCollision", kept_coll)]
     lines += ["", f"{len(kept_coll)} random targets kept of {tries} drawn (the others: the sampled configuration "
@@ -168,7 +177,8 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
         build.append(time.perf_counter() - t)
         for problem, rows, exact in ((free, rows_free, scene), (table, rows_table, None), (coll, rows_coll, scene)):
             result, seconds = _timed(problem, k)
-            rows.append((*_strictly(problem, result, shape, scene, self_pairs=exact is not None), seconds))
+            rows.append((*_strictly(problem, result, shape, scene, self_pairs=exact is not None), seconds,
+                         _on_hulls(result)))
     lines = HEADER + [_row("unconstrained (checked: self + table)", rows_free),
                       _row("Obstacles(table) (checked: table)", rows_table),
                       _row("SelfCollision + Obstacles(table) (checked: self + table)", rows_coll)]
@@ -224,6 +234,25 @@ def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -
                 times.append(1e6 * best)
             lines.append(f"| {name} | {s['pairs']} / {s['spheres']} / {s['blocks']} | {pop} | {times[0]:.1f} | "
                          f"{times[1]:.1f} | {times[1] / times[0]:.1f} |")
+    lines += ["", "One linearization of the engine (every task row's residual and Jacobian at one configuration, the "
+              "local engine's unit of work; µs per call, best of 5 x 200 random configurations):", "",
+              "| robot | without µs | with µs | ratio |", "|---|---:|---:|---:|"]
+    for name, s in setups:
+        X = s["robot"].random_configurations(rng, 200)
+        times = []
+        for problem in (s["free"], s["coll"]):
+            program = problem.program
+            rows = int(program.prog[0][:, ROWS].sum())
+            r, J = np.empty(rows), np.empty((rows, X.shape[1]))
+            residuals_at(X[0], TASK, program.kin, program.prog, r, J)
+            best = np.inf
+            for _ in range(5):
+                t = time.perf_counter()
+                for x in X:
+                    residuals_at(x, TASK, program.kin, program.prog, r, J)
+                best = min(best, (time.perf_counter() - t) / len(X))
+            times.append(1e6 * best)
+        lines.append(f"| {name} | {times[0]:.1f} | {times[1]:.1f} | {times[1] / times[0]:.1f} |")
     return lines
 
 

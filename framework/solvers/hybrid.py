@@ -129,6 +129,8 @@ class Hybrid(IKSolver):
         def better(a, b):  # the engine result that reaches the task, else the lower cost
             return min((a, b), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
 
+        hull_runs: list = []  # each run of the hull steps (its LocalResult)
+
         def hulls(result):  # the sphere rows kept it from the task: the last steps on the links' convex hulls
             nonlocal iterations, evaluations
             if result.reached or not blocked_by_spheres(problem.program, result.task_errors) \
@@ -138,6 +140,7 @@ class Hybrid(IKSolver):
             if hulled is None:
                 return result
             iterations, evaluations = iterations + hulled.iterations, evaluations + hulled.evaluations
+            hull_runs.append(hulled)
             counter.report(hulled.x)
             return hulled if hulled.reached else result
 
@@ -174,6 +177,7 @@ class Hybrid(IKSolver):
         stop = stop_reason(within(problem, x, request) if errors is None else best.reached, request)
         report = {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
                   "restart_count": restarts, "regularized": best.regularized, "weighted": weighted,
+                  "hull_runs": len(hull_runs), "on_hulls": any(best is r for r in hull_runs),
                   "population": request.population}
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values)
