@@ -1,7 +1,7 @@
 """Obstacles in the robot's world: spheres, boxes, capsules, half-spaces (a floor, a wall) and meshes.
 
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
-for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.blocks.solid_distance`),
+for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.collision_blocks.solid_distance`),
 the exact check builds coal geometry from it (:meth:`framework.collision.RobotShape.check` with ``scene=``),
 recordings and meshcat draw it (each obstacle's ``rerun`` / ``meshcat`` method), M-FABRIK plans its base around
 their shadows on the floor (``footprint``, :meth:`framework.fabrik.Environment.from_scene`), and task files give

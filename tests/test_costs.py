@@ -210,7 +210,7 @@ def test_lagrangian_curvature_of_a_task_on_its_target(robot, rng):
 
 
 def _curvature(program, x, mu):
-    from framework.costs.blocks import block_curvature
+    from framework.costs.curvature import block_curvature
     from framework.costs.kernels import linearize, workspace
 
     ws = workspace(program.kin, program.prog, x.size)

@@ -25,11 +25,11 @@ from .blocks import (
     TOL_ANGULAR,
     TOL_LINEAR,
     WEIGHT,
-    block_residual,
     is_hinge,
     rho_value,
-    scratch_size,
 )
+from .collision_blocks import scratch_size
+from .dispatch import block_residual
 
 # Arguments of compiled calls, as numpy scalars: numba compiles a callee once per *literal* Python int / bool it
 # is called with (a whole compile, seconds for the engine's kernels), but once for all values of an int64 / bool.
@@ -45,7 +45,7 @@ ROW0 = np.int64(0)
 def workspace(kin, prog, n):
     """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
     ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
-    scratch (:func:`~framework.costs.blocks.scratch_size`) — as views of one allocation."""
+    scratch (:func:`~framework.costs.collision_blocks.scratch_size`) — as views of one allocation."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0

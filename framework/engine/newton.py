@@ -4,7 +4,7 @@
 regularizers (level 2, e.g. motion) without leaving it: Newton steps on the KKT system
 ``[H Aᵀ; A 0] [dx; −λ] = [−∇G; −r]`` over the coordinates not held at a bound, with ``H`` the Hessian of the
 Lagrangian ``G − λᵀr`` (the regularizers' own curvature plus the task's second-order kinematics, see
-:func:`~framework.costs.blocks.block_curvature`), followed by Gauss-Newton steps back onto the task. A step is
+:func:`~framework.costs.curvature.block_curvature`), followed by Gauss-Newton steps back onto the task. A step is
 kept only if it lowers ``G`` on the task; otherwise the Hessian is damped (``H + μI``). Converges quadratically.
 
 :func:`weighted_newton` — the weighted sum ``Σ w ρ(r)`` of every term as it stands, for objectives where
@@ -17,8 +17,9 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import (HALFSIN, KIND, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, block_curvature, is_hinge,
-                            rho_derivatives, rho_value)
+from ..costs.blocks import (HALFSIN, KIND, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, is_hinge, rho_derivatives,
+                            rho_value)
+from ..costs.curvature import block_curvature
 from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_AND_REGULARIZERS, YES,
                              level_value, linearize, task_errors, term_values, workspace)
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive

@@ -1,0 +1,182 @@
+"""Compiled residuals of the collision kinds (see :mod:`~.blocks`): ``SPHERES`` (two bodies' sphere covers, the
+closest pair, pruned by bounding spheres) and ``SOLIDS`` (one body's spheres against a sphere, box, capsule or
+half-space), with the signed distance to those solids and the scratch the sphere pairs need."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from .blocks import KIND, PPTR, SOLID_BOX, SOLID_CAPSULE, SOLID_HALFSPACE, SPHERES, hinge_row, on_frame, world_point
+
+
+@numba.njit(cache=True)
+def scratch_size(bint, params) -> int:
+    """Length of the blocks' scratch vector: 9 (a rotation), or three per sphere of the largest ``SPHERES``
+    block's second body (their world centres)."""
+    size = 9
+    for b in range(bint.shape[0]):
+        if bint[b, KIND] == SPHERES:
+            size = max(size, 3 * int(params[bint[b, PPTR] + 1]))
+    return size
+
+
+@numba.njit(cache=True)
+def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
+    """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_ij ‖(p_a + R_a c_ai) − (p_b + R_b c_bj)‖ − r_ai
+    − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
+    ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame).
+
+    Exact with two prunings: bodies whose bounding spheres are ``m`` apart are clear (every pair is at least that
+    far apart), and a sphere of ``a`` farther from ``b``'s bounding sphere than the closest pair found so far
+    is skipped. ``b``'s world centres go to the scratch ``S`` (3 per sphere), each computed once.
+    """
+    na, nb, margin = int(params[p]), int(params[p + 1]), params[p + 2]
+    A0, A1, A2 = world_point(out, fa, params, p + 3)
+    B0, B1, B2 = world_point(out, fb, params, p + 7)
+    RA, RB = params[p + 6], params[p + 10]
+    gap = np.sqrt((A0 - B0) ** 2 + (A1 - B1) ** 2 + (A2 - B2) ** 2) - RA - RB - margin
+    if gap >= 0.0:
+        hinge_row(gap, r, Jr, row, want_jacobian, n)
+        return
+    full = params[p + 11] != 0.0
+    qa = p + 12
+    qb = qa + 4 * na
+    qm = qb + 4 * nb
+    for j in range(nb):
+        S[3 * j], S[3 * j + 1], S[3 * j + 2] = world_point(out, fb, params, qb + 4 * j)
+    best, ai, bj = margin, -1, -1  # only pairs closer than the margin count
+    for i in range(na):
+        a0, a1, a2 = world_point(out, fa, params, qa + 4 * i)
+        ra = params[qa + 4 * i + 3]
+        if np.sqrt((a0 - B0) ** 2 + (a1 - B1) ** 2 + (a2 - B2) ** 2) - ra - RB >= best:
+            continue  # every sphere of b is at least this far
+        for j in range(nb):
+            if not full and params[qm + nb * i + j] == 0.0:
+                continue
+            reach = best + ra + params[qb + 4 * j + 3]  # a pair closer than best has ‖v‖ < reach
+            if reach <= 0.0:
+                continue
+            v0, v1, v2 = a0 - S[3 * j], a1 - S[3 * j + 1], a2 - S[3 * j + 2]
+            vv = v0 * v0 + v1 * v1 + v2 * v2
+            if vv < reach * reach:
+                best, ai, bj = np.sqrt(vv) - ra - params[qb + 4 * j + 3], i, j
+    if not hinge_row(best - margin if ai >= 0 else 0.0, r, Jr, row, want_jacobian, n):
+        return
+    q, s = qa + 4 * ai, qb + 4 * bj
+    a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    b0, b1, b2 = on_frame(out, fb, params[s], params[s + 1], params[s + 2])
+    v0, v1, v2 = out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1, \
+        out[fa, 11] + a2 - out[fb, 11] - b2
+    norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if norm > 0.0:
+        u0, u1, u2 = v0 / norm, v1 / norm, v2 / norm
+    else:
+        u0, u1, u2 = 0.0, 0.0, 1.0
+    ca0, ca1, ca2 = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0  # o_a × u
+    cb0, cb1, cb2 = b1 * u2 - b2 * u1, b2 * u0 - b0 * u2, b0 * u1 - b1 * u0
+    for i in range(n):
+        Jr[row, i] = (u0 * (Jf[fa, 0, i] - Jf[fb, 0, i]) + u1 * (Jf[fa, 1, i] - Jf[fb, 1, i])
+                      + u2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
+                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i]
+                      - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
+
+
+@numba.njit(cache=True)
+def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
+    """:func:`solid_distance` of a world point to the solid at ``params[p:]``, fixed in the world (``fb < 0``) or
+    on frame ``fb``; the gradient ``g`` in the world."""
+    if fb < 0:
+        return solid_distance(x, y, z, params, p, g)
+    v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
+    sd = solid_distance(out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2,
+                        out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2,
+                        out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2, params, p, g)
+    g0, g1, g2 = g[0], g[1], g[2]
+    g[0] = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2
+    g[1] = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
+    g[2] = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
+    return sd
+
+
+@numba.njit(cache=True)
+def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
+    """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
+    frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
+    sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
+    margin, count = params[p + 16], int(params[p + 17])
+    C0, C1, C2 = world_point(out, fa, params, p + 18)
+    gap = _solid_point_distance(out, fb, C0, C1, C2, params, p, g) - params[p + 21] - margin
+    if gap >= 0.0:  # the spheres' bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
+        hinge_row(gap, r, Jr, row, want_jacobian, n)
+        return
+    best, arg = 1e300, -1
+    for k in range(count):
+        q = p + 22 + 4 * k
+        a0, a1, a2 = world_point(out, fa, params, q)
+        d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g) - params[q + 3]
+        if d < best:
+            best, arg = d, k
+    if not hinge_row(best - margin, r, Jr, row, want_jacobian, n):
+        return
+    q = p + 22 + 4 * arg
+    a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    s0, s1, s2 = out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2
+    _solid_point_distance(out, fb, s0, s1, s2, params, p, g)
+    w0, w1, w2 = g[0], g[1], g[2]
+    ca0, ca1, ca2 = a1 * w2 - a2 * w1, a2 * w0 - a0 * w2, a0 * w1 - a1 * w0  # o × ∇sd
+    for i in range(n):
+        Jr[row, i] = (w0 * Jf[fa, 0, i] + w1 * Jf[fa, 1, i] + w2 * Jf[fa, 2, i]
+                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i])
+    if fb >= 0:
+        d0, d1, d2 = s0 - out[fb, 9], s1 - out[fb, 10], s2 - out[fb, 11]
+        cb0, cb1, cb2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0
+        for i in range(n):
+            Jr[row, i] -= (w0 * Jf[fb, 0, i] + w1 * Jf[fb, 1, i] + w2 * Jf[fb, 2, i]
+                           + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
+
+
+@numba.njit(cache=True)
+def solid_distance(x, y, z, params, p, g) -> float:
+    """Signed distance [m] of the point ``(x, y, z)`` to the solid of the SOLIDS parameters at
+    ``params[p:]`` (negative inside), and its gradient into ``g[:3]`` (world frame).
+
+    The point in the solid's frame is ``q = Rᵀ(point − c)``; dims are: a sphere's radius; a box's half sides;
+    a capsule's radius and half length along its z axis; nothing for a half-space (the solid is ``q_z <= 0``).
+    Inside a box the gradient is the nearest face's normal.
+    """
+    solid = int(params[p])
+    v0, v1, v2 = x - params[p + 10], y - params[p + 11], z - params[p + 12]
+    q0 = params[p + 1] * v0 + params[p + 4] * v1 + params[p + 7] * v2  # Rᵀ v
+    q1 = params[p + 2] * v0 + params[p + 5] * v1 + params[p + 8] * v2
+    q2 = params[p + 3] * v0 + params[p + 6] * v1 + params[p + 9] * v2
+    d0, d1, d2 = params[p + 13], params[p + 14], params[p + 15]
+    l0, l1, l2 = 0.0, 0.0, 0.0  # the gradient in the solid's frame
+    if solid == SOLID_HALFSPACE:
+        sd, l2 = q2, 1.0
+    elif solid == SOLID_BOX:
+        a0, a1, a2 = abs(q0) - d0, abs(q1) - d1, abs(q2) - d2
+        o0, o1, o2 = max(a0, 0.0), max(a1, 0.0), max(a2, 0.0)
+        outside = np.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
+        s0, s1, s2 = (1.0 if q0 >= 0.0 else -1.0), (1.0 if q1 >= 0.0 else -1.0), (1.0 if q2 >= 0.0 else -1.0)
+        if outside > 0.0:
+            sd = outside
+            l0, l1, l2 = s0 * o0 / outside, s1 * o1 / outside, s2 * o2 / outside
+        elif a0 >= a1 and a0 >= a2:
+            sd, l0 = a0, s0
+        elif a1 >= a2:
+            sd, l1 = a1, s1
+        else:
+            sd, l2 = a2, s2
+    else:  # a sphere (the capsule's segment of half length 0) or a capsule
+        if solid == SOLID_CAPSULE:
+            q2 -= min(d1, max(-d1, q2))
+        norm = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
+        sd = norm - d0
+        if norm > 0.0:
+            l0, l1, l2 = q0 / norm, q1 / norm, q2 / norm
+        else:
+            l2 = 1.0
+    for c in range(3):  # g = R l
+        g[c] = params[p + 1 + 3 * c] * l0 + params[p + 2 + 3 * c] * l1 + params[p + 3 + 3 * c] * l2
+    return sd
