@@ -104,6 +104,7 @@ class RobotShape:
             self._remove_always_colliding(always)
         self._covers: dict[tuple, SphereCover] = {}
         self._hulls: dict[int, object] = {}
+        self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
 
@@ -170,7 +171,7 @@ class RobotShape:
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:
         """Geometry name -> ``(joint, placement in the joint, solid parameters (16,), volume [m³])`` of every box,
         capsule and cylinder (a cylinder as the capsule holding it): the kernel's signed distance to them is exact
-        (see :func:`framework.costs.blocks.solid_distance`), so they need no sphere cover on one side of a pair."""
+        (see :func:`framework.costs.collision_blocks.solid_distance`), so they need no sphere cover on one side of a pair."""
         import coal
 
         from .scene import BOX, CAPSULE
@@ -189,6 +190,13 @@ class RobotShape:
             out[g.name] = (int(g.parentJoint), g.placement, np.concatenate([[solid], np.eye(3).ravel(), np.zeros(3),
                                                                               dims]), volume)
         return out
+
+    def memo(self, key: tuple, make):
+        """What ``make()`` returns, built once per shape and ``key`` (the hull pairs of a collision term)."""
+        value = self._memo.get(key)
+        if value is None:
+            value = self._memo[key] = make()
+        return value
 
     def hull(self, index: int):
         """The convex coal geometry of geometry object ``index``: a mesh's convex hull (built once, qhull), a

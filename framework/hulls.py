@@ -13,7 +13,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 import pinocchio as pin
 
 from .collision import RobotShape
@@ -31,6 +30,10 @@ class HullPair:
         shapes: coal geometries (a mesh's convex hull; primitives and obstacle meshes as they are), with their
             local bounding spheres computed (``aabb_center``, ``aabb_radius``).
         margin: distance to keep [m].
+        exact: the geometries themselves (meshes), for telling nested hulls from contact.
+        loose: the collision term's sphere model of this pair is looser than the hulls (a mesh, box or cylinder
+            covered by spheres); False when it is exact (spheres, or a sphere against a box used whole), where
+            the hull steps cannot find more room.
     """
 
     names: tuple[str, str]
@@ -38,20 +41,33 @@ class HullPair:
     placements: tuple[pin.SE3, pin.SE3]
     shapes: tuple[Any, Any]
     margin: float
+    exact: tuple[Any, Any]
+    loose: bool
 
 
 def self_pairs(shape: RobotShape, margin: float, skip: frozenset[tuple[str, str]] = frozenset()
                ) -> tuple[HullPair, ...]:
     """The robot's own checked pairs (:attr:`RobotShape.pairs`) but ``skip``, as hulls."""
     objects = shape.geometry.geometryObjects
+    solids = shape.solids()
     out = []
     for p in shape.geometry.collisionPairs:
         a, b = objects[p.first], objects[p.second]
         if (a.name, b.name) in skip:
             continue
+        exact = (_is_sphere(a) or a.name in solids) and (_is_sphere(b) or b.name in solids) \
+            and (_is_sphere(a) or _is_sphere(b))  # spheres, or a sphere against a box or capsule used whole
         out.append(HullPair((a.name, b.name), (int(a.parentJoint), int(b.parentJoint)), (a.placement, b.placement),
-                            (shape.hull(p.first), shape.hull(p.second)), margin))
+                            (shape.hull(p.first), shape.hull(p.second)), margin, (a.geometry, b.geometry),
+                            not exact))
     return tuple(out)
+
+
+def _is_sphere(geometry_object) -> bool:
+    """Whether a geometry is a sphere: its sphere cover is itself."""
+    import coal
+
+    return isinstance(geometry_object.geometry, coal.Sphere)
 
 
 def obstacle_pairs(shape: RobotShape, scene: Scene, margin: float) -> tuple[HullPair, ...]:
@@ -63,10 +79,6 @@ def obstacle_pairs(shape: RobotShape, scene: Scene, margin: float) -> tuple[Hull
         for k, g in enumerate(shape.geometry.geometryObjects):
             if g.parentJoint != 0:
                 out.append(HullPair((g.name, f"obstacle:{obstacle.name}"), (int(g.parentJoint), 0),
-                                    (g.placement, placement), (shape.hull(k), solid), margin))
+                                    (g.placement, placement), (shape.hull(k), solid), margin, (g.geometry, solid),
+                                    not _is_sphere(g)))
     return tuple(out)
-
-
-def bounding_radius(shape: Any) -> tuple[np.ndarray, float]:
-    """A coal geometry's bounding sphere in its own frame: ``(centre (3,), radius)`` [m]."""
-    return np.asarray(shape.aabb_center, dtype=float), float(shape.aabb_radius)

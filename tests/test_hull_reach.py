@@ -87,3 +87,17 @@ def test_hull_rows_match_differences_of_coal_distances(rng):
             np.testing.assert_allclose(gradients[0], numeric, atol=1e-5)
             checked += 1
     assert checked >= 10
+
+
+def test_hull_steps_only_where_the_spheres_are_looser(plate, erd):
+    """Where the sphere model is exact (the youBot's sphere links, a sphere against its platform's box used whole)
+    no pair is loose and the hull steps never run; PR2's meshes and the plate's box covered by spheres are."""
+    youbot = fw.load_robot("youbot_dual_mobile")
+    pairs = fw.SelfCollision(fw.RobotShape(youbot)).hull_pairs(youbot)
+    assert len(pairs) > 100 and not any(p.loose for p in pairs)
+    robot, shape = plate
+    assert all(p.loose for p in fw.Obstacles(shape, [TABLE]).hull_pairs(robot))
+    pr2 = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                        joints=["torso_lift_joint", "l_shoulder_pan_joint", "r_shoulder_pan_joint"])
+    pr2_pairs = fw.SelfCollision(fw.RobotShape(pr2)).hull_pairs(pr2)
+    assert pr2_pairs and all(p.loose for p in pr2_pairs)

@@ -117,7 +117,7 @@ class SelfCollision(Term):
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every checked pair of the robot's own geometries, as convex hulls (those included that the sphere
         rows leave to the exact check)."""
-        return self_pairs(self.shape, self.margin)
+        return self.shape.memo(("self hull pairs", self.margin), lambda: self_pairs(self.shape, self.margin))
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
@@ -195,7 +195,7 @@ class Obstacles(Term):
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every moving geometry's convex hull against every obstacle."""
-        return obstacle_pairs(self.shape, self.scene, self.margin)
+        return obstacle_pairs(self.shape, self.scene, self.margin)  # per term: a scene is a value, not a key
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are

@@ -6,8 +6,9 @@ links, may leave no room where the links have some (a hand a few millimetres abo
 the few solves that need it: the rows of the other task terms come from the compiled kernel; each pair within
 reach gives coal's signed distance ``d`` between the hulls, witness points ``p_a``, ``p_b`` and normal ``n``
 (from ``a`` to ``b``), the hinge row ``min(0, d − m − BUFFER)`` and its Jacobian ``n·(v_b(p_b) − v_a(p_a))``,
-``v(p) = J_p + ω × (p − o)`` of the body's frame. Pairs whose hulls are within the margin at the start (links
-nested in each other's hull) have no row: the exact check, which decides success, still holds them.
+``v(p) = J_p + ω × (p − o)`` of the body's frame. Pairs whose hulls overlap at the start while their geometries
+do not touch (links nested in each other's hull) have no row; the exact check, which decides success, still holds
+them, and an answer it finds in contact is no answer.
 """
 
 from __future__ import annotations
@@ -117,18 +118,29 @@ class HullRows:
         other._keep([self.pairs[k] for k in indices], self._slot)
         return other
 
-    def keep_clear_at(self, x: np.ndarray) -> None:
-        """Drop the pairs already within their margin at ``x`` (nested hulls: left to the exact check)."""
+    def drop_nested_at(self, x: np.ndarray) -> None:
+        """Drop the pairs whose hulls overlap at ``x`` while their geometries do not touch (a concave link nested in
+        another's hull: no configuration may separate the hulls; the exact check still holds the pair). Pairs
+        in contact keep their rows, which push them apart."""
+        import coal
+
         _, _, R, t, near = self._near(x)
-        inside = {k for k in near if self._height(k, R, t) < 0}
-        self._keep([p for k, p in enumerate(self.pairs) if k not in inside], self._slot)
+        nested = set()
+        for k in near:
+            if self._height(k, R, t) < 0:
+                a, b = self.pairs[k].exact
+                request, result = coal.CollisionRequest(), coal.CollisionResult()
+                if not coal.collide(a, self.transform(R[k, 0], t[k, 0]), b, self.transform(R[k, 1], t[k, 1]),
+                                    request, result):
+                    nested.add(k)
+        self._keep([p for k, p in enumerate(self.pairs) if k not in nested], self._slot)
 
 
 def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
-    """Whether a collision term's sphere rows are active among the task errors ``(blocks,)`` of ``program`` (and it
-    has hull pairs to try instead)."""
+    """Whether a collision term's sphere rows are active among the task errors ``(blocks,)`` of ``program`` and
+    its hulls could give more room (a pair whose sphere model is looser than its hulls)."""
     return any(e > 0 for e, exact in zip(task_errors.tolist(), program.task_checked_exactly) if exact) \
-        and bool(program.hull_pairs)
+        and any(p.loose for p in program.hull_pairs)
 
 
 def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
@@ -147,7 +159,7 @@ def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = Local
     lower, upper, box_wrap = search_box(program)
     x = np.array(x0, dtype=float)
     project(x, lower, upper, box_wrap)
-    pairs.keep_clear_at(x)
+    pairs.drop_nested_at(x)
     n = x.size
 
     def rows(x: np.ndarray) -> _Rows:

@@ -142,7 +142,8 @@ class Hybrid(IKSolver):
             iterations, evaluations = iterations + hulled.iterations, evaluations + hulled.evaluations
             hull_runs.append(hulled)
             counter.report(hulled.x)
-            return hulled if hulled.reached else result
+            clear = hulled.reached and not problem.collisions(hulled.x).colliding  # nested pairs have no rows
+            return hulled if clear else result
 
         escalated = False
         if o.global_iterations:
