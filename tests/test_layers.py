@@ -95,3 +95,14 @@ def test_the_check_sees_imports_inside_functions(tmp_path):
     """The exception is real (a lazy import inside a function): the check finds it when it is not excused."""
     assert "cluster.py" in imports("batch.py")
     assert layer_of("cluster.py") > layer_of("batch.py")
+
+
+def test_every_long_module_states_why():
+    """A module over 450 lines (the issue's ~400, with room for a docstring's growth) is named, with its reason,
+    under "Modules over 400 lines" on the map; a module named there that is short again is dropped from it."""
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    section = text[text.index("## Modules over 400 lines"):text.index("## A solve")]
+    named = set(re.findall(r"`([\w/]+\.py)`", section))
+    lengths = {m: len((PACKAGE / m).read_text(encoding="utf-8").splitlines()) for m in modules()}
+    assert [m for m, n in lengths.items() if n > 450 and m not in named] == []
+    assert [m for m in named if m in lengths and lengths[m] <= 350] == []

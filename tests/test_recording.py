@@ -27,7 +27,7 @@ from framework.cli.replay import add_replay_command, replay_command
 from framework.solve import solve
 from framework.solvers import minimize
 from framework.taskfile import load_task
-from framework.viewer import resolve_mesh
+from framework.drawing import resolve_mesh
 
 TASK = "tasks/youbot_dual_coordinated_ik.toml"
 

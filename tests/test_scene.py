@@ -355,7 +355,7 @@ size = [0.3, 0.3, 0.6]
 def test_frames_added_by_a_collision_term_after_a_drawing_was_made():
     """A drawing made first, a collision term adding its body frames to the model after: the drawing still poses
     every frame (Pinocchio sizes its Data once; writing past it corrupted memory)."""
-    from framework.viewer import RobotDrawing
+    from framework.drawing import RobotDrawing
 
     robot = fw.load_robot("youbot_dual")
     drawing = RobotDrawing(robot)

@@ -14,7 +14,8 @@ import numpy as np
 import framework as fw
 from framework.tracking import TrackingTask, track
 from framework.trajectory import paper000
-from framework.viewer import RobotDrawing, Viewer, find_chromium, screenshot
+from framework.drawing import RobotDrawing
+from framework.viewer import Viewer, find_chromium, screenshot
 
 HERE = Path(__file__).parent
 

@@ -25,7 +25,7 @@ Recording a task file's run as it goes::
             recorder.log_case(case, solve(case.problem, "hybrid"))    # or a track(...) result
 
 :func:`replay` opens a file in the rerun viewer (``metaik replay run.rrd``); :func:`read_recording` reads one
-back with rerun's own reader, for scripts and tests. The robot is drawn as :class:`framework.viewer.RobotDrawing`
+back with rerun's own reader, for scripts and tests. The robot is drawn as :class:`framework.drawing.RobotDrawing`
 draws it: links as segments between frame origins, plus the URDF's meshes where their files resolve locally
 (nothing is ever downloaded).
 """

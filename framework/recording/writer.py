@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..scene import Scene
-from ..viewer import (
+from ..drawing import (
     DESIRED_COLOR,
     JOINT_COLOR,
     LINK_COLOR,
