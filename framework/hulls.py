@@ -82,3 +82,9 @@ def obstacle_pairs(shape: RobotShape, scene: Scene, margin: float) -> tuple[Hull
                                     (g.placement, placement), (shape.hull(k), solid), margin, (g.geometry, solid),
                                     not _is_sphere(g)))
     return tuple(out)
+
+
+def moving_loose(shape: RobotShape) -> bool:
+    """Whether a geometry that moves is not a sphere: the obstacle pairs' sphere model is then looser than the
+    hulls (see :func:`obstacle_pairs`)."""
+    return any(g.parentJoint != 0 and not _is_sphere(g) for g in shape.geometry.geometryObjects)

@@ -121,6 +121,10 @@ class Term:
         model for the engine's last steps), none for other terms."""
         return ()
 
+    def loose_hulls(self, robot: Robot) -> bool:
+        """Whether any of :meth:`hull_pairs` is loose (its rows' spheres are fatter than its hulls)."""
+        return False
+
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""
         return {}

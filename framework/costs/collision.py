@@ -21,7 +21,7 @@ import pinocchio as pin
 
 from ..collision import CollisionReport, RobotShape
 from ..errors import TaskError
-from ..hulls import HullPair, obstacle_pairs, self_pairs
+from ..hulls import HullPair, moving_loose, obstacle_pairs, self_pairs
 from ..robot import Robot
 from ..scene import Scene
 from ..spheres import SphereCover
@@ -119,6 +119,9 @@ class SelfCollision(Term):
         rows leave to the exact check)."""
         return self.shape.memo(("self hull pairs", self.margin), lambda: self_pairs(self.shape, self.margin))
 
+    def loose_hulls(self, robot: Robot) -> bool:
+        return self.shape.memo(("self hulls loose", self.margin), lambda: any(p.loose for p in self.hull_pairs(robot)))
+
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
         other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
@@ -196,6 +199,9 @@ class Obstacles(Term):
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every moving geometry's convex hull against every obstacle."""
         return obstacle_pairs(self.shape, self.scene, self.margin)  # per term: a scene is a value, not a key
+
+    def loose_hulls(self, robot: Robot) -> bool:
+        return self.shape.memo(("moving geometries loose",), lambda: moving_loose(self.shape))
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are

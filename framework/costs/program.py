@@ -230,6 +230,11 @@ class Program:
         """The convex-hull pairs the collision terms keep apart (:meth:`Term.hull_pairs`), built once."""
         return tuple(p for t in self.terms for p in t.hull_pairs(self.robot))
 
+    @cached_property
+    def loose_hulls(self) -> bool:
+        """Whether a collision term's hull pairs include a loose one (:meth:`Term.loose_hulls`)."""
+        return any(t.loose_hulls(self.robot) for t in self.terms)
+
     def reference(self, x: np.ndarray) -> bool:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they
         cover); returns whether there is any."""

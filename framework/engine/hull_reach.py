@@ -140,7 +140,7 @@ def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
     """Whether a collision term's sphere rows are active among the task errors ``(blocks,)`` of ``program`` and
     its hulls could give more room (a pair whose sphere model is looser than its hulls)."""
     return any(e > 0 for e, exact in zip(task_errors.tolist(), program.task_checked_exactly) if exact) \
-        and any(p.loose for p in program.hull_pairs)
+        and program.loose_hulls
 
 
 def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
