@@ -8,7 +8,8 @@ reach gives coal's signed distance ``d`` between the hulls, witness points ``p_a
 (from ``a`` to ``b``), the hinge row ``min(0, d − m − BUFFER)`` and its Jacobian ``n·(v_b(p_b) − v_a(p_a))``,
 ``v(p) = J_p + ω × (p − o)`` of the body's frame. Pairs whose hulls overlap at the start while their geometries
 do not touch (links nested in each other's hull) have no row; the exact check, which decides success, still holds
-them, and an answer it finds in contact is no answer.
+them, and an answer it finds in contact is no answer. The regularizers (motion) are not minimized after these
+steps: their answer is the first configuration that reaches the task clear of contact.
 """
 
 from __future__ import annotations
