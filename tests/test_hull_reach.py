@@ -101,3 +101,21 @@ def test_hull_steps_only_where_the_spheres_are_looser(plate, erd):
                         joints=["torso_lift_joint", "l_shoulder_pan_joint", "r_shoulder_pan_joint"])
     pr2_pairs = fw.SelfCollision(fw.RobotShape(pr2)).hull_pairs(pr2)
     assert pr2_pairs and all(p.loose for p in pr2_pairs)
+
+
+def test_a_batch_reaches_the_plate_targets_as_single_solves_do(plate):
+    """``solve_batch`` over plate targets just above the table: the items the compiled engine leaves short (the
+    sphere rows) are solved as ``solve`` solves them (item ``i`` with seed ``i``), hull steps included, and count
+    as successes by the exact check like the single solves: the same configurations."""
+    robot, shape = plate
+    targets = [[0.0, 0.0, HALF + h] for h in (0.002, 0.004, 0.006)]
+    problem = fw.Problem(robot, fw.Position("plate", targets[0]) + fw.Obstacles(shape, [TABLE]))
+    batch = fw.solve_batch(problem, targets, seed=0, tolerance=1e-6)
+    assert batch.success.all()
+    for i, target in enumerate(targets):
+        single = fw.solve(fw.Problem(robot, fw.Position("plate", target) + fw.Obstacles(shape, [TABLE])), seed=i,
+                          tolerance=1e-6)
+        assert single.success and single.settings["on_hulls"]
+        np.testing.assert_array_equal(batch.configurations[i], single.configuration)
+        reached = robot.frame_placement(batch.configurations[i], "plate").translation
+        assert np.linalg.norm(reached - target) <= 1e-6
