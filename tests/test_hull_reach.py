@@ -119,3 +119,19 @@ def test_a_batch_reaches_the_plate_targets_as_single_solves_do(plate):
         np.testing.assert_array_equal(batch.configurations[i], single.configuration)
         reached = robot.frame_placement(batch.configurations[i], "plate").translation
         assert np.linalg.norm(reached - target) <= 1e-6
+
+
+def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
+    """The engine redraws a restart that begins in contact (``CLEAR_DRAWS``): its test, any violated one-sided task
+    row, agrees with the collision term's value (positive exactly when a pair is closer than the margin) over
+    random youBot configurations, most of which are in contact."""
+    from framework.engine.local import residuals
+    from framework.engine.reach import hinge_violated
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.0, 0.4]) + fw.SelfCollision(fw.RobotShape(robot)))
+    X = robot.random_configurations(rng, 60)
+    values = problem.values(X)[:, 1]
+    found = [hinge_violated(problem.program.prog, residuals(problem.program, x)[0]) for x in X]
+    assert found == [bool(v > 0) for v in values.tolist()]
+    assert 0 < sum(found) < len(found)

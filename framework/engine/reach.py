@@ -17,6 +17,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, is_hinge
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
@@ -31,6 +32,9 @@ DAMPING_START, DAMPING_MIN, DAMPING_MAX, DAMPING_UP, DAMPING_DOWN = 0.1, 1e-12, 
 PROGRESS = 0.9
 #: ``‖r‖²`` at which polishing stops: ``‖r‖ <= 1e-15``, machine precision for residuals of order one.
 POLISHED = 1e-30
+#: Draws a restart may take to begin clear of the one-sided blocks (contact): a start inside a collision spends
+#: its first iterations getting out; most random configurations of a dual arm are in contact.
+CLEAR_DRAWS = 16
 
 
 @numba.njit(cache=True)
@@ -84,6 +88,24 @@ def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> 
         for a in range(m):
             Jc[a, i] = Jr[a, i] if keep else 0.0
     return damped_step(Jc, r, damping, A, L, y, dx)
+
+
+@numba.njit(cache=True)
+def hinge_violated(prog, r) -> bool:
+    """Whether a one-sided task block (a distance band, a cone, a collision row) is violated in the stacked task
+    residuals ``r``."""
+    bint = prog[0]
+    row = 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != LEVEL_TASK:
+            continue
+        rows = bint[b, ROWS]
+        if is_hinge(bint[b, KIND]):
+            for c in range(row, row + rows):
+                if r[c] != 0.0:
+                    return True
+        row += rows
+    return False
 
 
 @numba.njit(cache=True)
@@ -175,11 +197,15 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             if restarted >= restarts:
                 status = STARTS
                 break
-            uniform_in_box(rng, lower, upper, x)
+            for _ in range(CLEAR_DRAWS):  # a start clear of the hinges (contact) if a few draws find one
+                uniform_in_box(rng, lower, upper, x)
+                project(x, lower, upper, box_wrap)
+                linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
+                evaluations += 1
+                if not hinge_violated(prog, ws[3]):
+                    break
             restarted += 1
-            project(x, lower, upper, box_wrap)
-            linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
-            evaluations += 1
+            linearize(x, TASK, kin, prog, ws, YES, JACOBIANS_FROM_POSES)
             e = squared_norm(ws[3], m)
             if e < best_e:
                 best_e = e
