@@ -46,18 +46,8 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
         m0 = params[p] * v[0] + params[p + 1] * v[1] + params[p + 2] * v[2]
         m1 = params[p + 3] * v[0] + params[p + 4] * v[1] + params[p + 5] * v[2]
         m2 = params[p + 6] * v[0] + params[p + 7] * v[1] + params[p + 8] * v[2]
-        lo, hi = chain_ptr[fa], chain_ptr[fa + 1]
-        for s in range(lo, hi):
-            i = chain_idx[s]
-            wx, wy, wz = Jf[fa, 3, i], Jf[fa, 4, i], Jf[fa, 5, i]
-            if wx == 0.0 and wy == 0.0 and wz == 0.0:
-                continue
-            for t in range(s + 1, hi):
-                j = chain_idx[t]
-                vx, vy, vz = Jf[fa, 3, j], Jf[fa, 4, j], Jf[fa, 5, j]
-                h = 0.5 * (m0 * (wy * vz - wz * vy) + m1 * (wz * vx - wx * vz) + m2 * (wx * vy - wy * vx))
-                H[i, j] += h
-                H[j, i] += h
+        # ½ μ'·(ω_i × ω_j): the chain sum with the angular columns (zero on the diagonal, ω_i × ω_i = 0)
+        _chain_curvature(fa, 0.5 * m0, 0.5 * m1, 0.5 * m2, Jf[fa, 3:6], Jf, chain_ptr, chain_idx, H)
         return
     if kind == AXIS:  # Σ μ·∇²r = m·∂²w, m = (Bμ) × d, ∂²w/∂x_i∂x_j = ω_i × (ω_j × w) for i before j
         p, fa = bint[b, PPTR], bint[b, FA]
