@@ -45,16 +45,13 @@ class HullPair:
     loose: bool
 
 
-def self_pairs(shape: RobotShape, margin: float, skip: frozenset[tuple[str, str]] = frozenset()
-               ) -> tuple[HullPair, ...]:
-    """The robot's own checked pairs (:attr:`RobotShape.pairs`) but ``skip``, as hulls."""
+def self_pairs(shape: RobotShape, margin: float) -> tuple[HullPair, ...]:
+    """The robot's own checked pairs (:attr:`RobotShape.pairs`), as hulls."""
     objects = shape.geometry.geometryObjects
     solids = shape.solids()
     out = []
     for p in shape.geometry.collisionPairs:
         a, b = objects[p.first], objects[p.second]
-        if (a.name, b.name) in skip:
-            continue
         exact = (_is_sphere(a) or a.name in solids) and (_is_sphere(b) or b.name in solids) \
             and (_is_sphere(a) or _is_sphere(b))  # spheres, or a sphere against a box or capsule used whole
         out.append(HullPair((a.name, b.name), (int(a.parentJoint), int(b.parentJoint)), (a.placement, b.placement),

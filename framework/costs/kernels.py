@@ -99,7 +99,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
         lv = bint[b, LEVEL]
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
             continue
-        if kinematics == 2 and is_hinge(bint[b, KIND]) and _clear(r, row, bint[b, ROWS]):
+        if kinematics == 2 and is_hinge(bint[b, KIND]) and rows_clear(r, row, bint[b, ROWS]):
             Jr[row : row + bint[b, ROWS], :] = 0.0  # clear at x in the previous call: nothing to recompute
             row += bint[b, ROWS]
             continue
@@ -108,7 +108,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
 
 
 @numba.njit(cache=True, inline="always")
-def _clear(r, row, rows) -> bool:
+def rows_clear(r, row, rows) -> bool:
     """Whether the residual rows ``r[row:row + rows]`` are all zero."""
     for c in range(row, row + rows):
         if r[c] != 0.0:

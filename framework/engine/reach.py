@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, is_hinge
-from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, task_errors, term_values, within_tolerance, workspace
+from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, rows_clear, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
@@ -100,10 +100,8 @@ def hinge_violated(prog, r) -> bool:
         if bint[b, LEVEL] != LEVEL_TASK:
             continue
         rows = bint[b, ROWS]
-        if is_hinge(bint[b, KIND]):
-            for c in range(row, row + rows):
-                if r[c] != 0.0:
-                    return True
+        if is_hinge(bint[b, KIND]) and not rows_clear(r, row, rows):
+            return True
         row += rows
     return False
 
