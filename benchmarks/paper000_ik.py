@@ -261,8 +261,9 @@ def main(argv: list[str] | None = None) -> int:
             "Mean, sample std, best and worst over the runs; ratio = our mean / the paper's; success = e_t1 + e_t2 "
             f"≤ {grid.tolerance:g} m. `cmaes` is pycma, `cmaes_fast` our numpy CMA-ES (both compared with the "
             "paper's CMA-ES); `hybrid` (ours, not in the paper) = the compiled local engine from q_prev "
-            "(Levenberg-Marquardt to the targets, then Newton steps minimizing the motion terms on them), escalating to "
-            "a 30-generation CMA-ES phase if it misses."
+            "(Levenberg-Marquardt to the targets, then Newton steps minimizing the motion terms on them; the task "
+            "file sets `priorities = false`, so that point is kept only if leaving the targets would not lower f, "
+            "the paper's weighted sum), escalating to a 30-generation CMA-ES phase if it misses."
         ),
         "",
     ]

@@ -62,8 +62,9 @@ class Problem:
         priorities: ``True`` (default): the task terms come first, whatever the weights — the local solvers reach
             the task and minimize the regularizers without leaving it. ``False`` (the papers' weighted sums):
             the weighted sum is what counts, so with small task weights the optimum may stop short of a
-            reachable target. Metaheuristics minimize the weighted sum, or with ``options={"ranking":
-            "feasibility"}`` rank by Deb's rules on these levels (the task's tolerances first).
+            reachable target. Metaheuristics rank by Deb's rules on these levels when there are
+            regularizers (a candidate within the task's tolerances first, then the lower regularizer cost), by
+            the weighted sum without priorities (or with ``options={"ranking": "weighted"}``).
 
     Targets of the terms may be changed in place (``term.set_target(...)``); the problem re-reads them.
     ``program`` is the objective packed for the compiled kernels and the local engine (built with the problem);

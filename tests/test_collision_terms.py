@@ -13,13 +13,13 @@ from tests.test_collision import L, R
 
 def test_motion_towards_a_collision_stops_at_the_margin(sphere_arm):
     """Motion towards (0, 0) puts the two spheres on each other; kept apart, the optimum splits the angle
-    θ* = 2 asin((2R + margin) / 2L) equally between the joints (closed form), found by DE ranked by Deb's rules."""
+    θ* = 2 asin((2R + margin) / 2L) equally between the joints (closed form), found by DE ranked by Deb's rules (the default with priorities)."""
     robot, shape, exact = sphere_arm
     margin = 0.01
     free = fw.solve(fw.Problem(robot, 1.0 * fw.Motion("all", [0.0, 0.0])), initial=np.array([1.0, 0.5]))
     assert shape.check(free.configuration).colliding
     problem = fw.Problem(robot, fw.SelfCollision(shape, margin=margin, cover=exact) + fw.Motion("all", [0.0, 0.0]))
-    result = fw.solve(problem, "de", seed=0, max_iterations=300, tolerance=1e-6, options={"ranking": "feasibility"})
+    result = fw.solve(problem, "de", seed=0, max_iterations=300, tolerance=1e-6)
     half = np.arcsin((2 * R + margin) / (2 * L))
     assert result.success
     np.testing.assert_allclose(np.abs(result.configuration), [half, half], atol=1e-3)
@@ -53,7 +53,7 @@ def test_sphere_obstacles_are_kept_clear(sphere_arm):
     obstacle = np.array([0.0, L, 0.0])  # on the forearm sphere's circle, at θ1 + θ2 = π/2
     problem = fw.Problem(robot, fw.Obstacles(shape, [fw.Sphere(obstacle, 0.05)], margin=0.01, cover=exact)
                          + fw.Motion("all", [np.pi / 4, np.pi / 4]))
-    result = fw.solve(problem, "de", seed=0, max_iterations=300, tolerance=1e-6, options={"ranking": "feasibility"})
+    result = fw.solve(problem, "de", seed=0, max_iterations=300, tolerance=1e-6)
     world = exact.world_centers(shape, result.configuration)[1]
     assert result.success and np.linalg.norm(world - obstacle) >= R + 0.05 + 0.01 - 1e-6
     with pytest.raises(TaskError, match="no obstacle"):

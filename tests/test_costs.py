@@ -31,6 +31,24 @@ def test_position_equals_pinocchio_distance(robot, rng):
     np.testing.assert_allclose(values, expected, rtol=0, atol=1e-12)
 
 
+def test_task_errors_of_a_population_are_pinocchio_s(robot, rng):
+    """Each task block's error for a population (the rows Deb's ranking compares with the tolerances): the
+    position distance and the rotation angle from Pinocchio's placements, each row equal to the single call."""
+    X = robot.random_configurations(rng, 50)
+    target = pin.SE3(Rotation.from_rotvec([0.3, -0.2, 0.5]).as_matrix(), np.array([0.5, -0.2, 0.45]))
+    problem = Problem(robot, fw.Pose("arm2_ee", target) + 0.1 * Motion("all", robot.middle))
+    errors = problem.program.task_errors(X)
+    assert errors.shape == (50, 2) and problem.program.task_angular == (False, True)
+    placements = reference_placements(robot, X, "arm2_ee")
+    np.testing.assert_allclose(errors[:, 0], [np.linalg.norm(M.translation - target.translation)
+                                              for M in placements], atol=1e-12)
+    np.testing.assert_allclose(errors[:, 1], [np.linalg.norm(pin.log3(target.rotation.T @ M.rotation))
+                                              for M in placements], atol=1e-9)
+    for x, row in zip(X, errors):
+        np.testing.assert_array_equal(problem.program.task_errors(x), row)
+    np.testing.assert_array_equal(problem.program.limits(1e-3, 2e-3), [1e-3, 2e-3])
+
+
 def test_relative_position_against_pinocchio(robot, rng):
     X = robot.random_configurations(rng, 100)
     offset = np.array([0.2, -0.3, -0.2])

@@ -16,7 +16,7 @@ Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 
 
 @pytest.fixture(scope="module")
 def problem() -> Problem:
-    """Paper 000, target point 1 (coordinated: t*_e2 = t*_e1 + t_r)."""
+    """Paper 000, target point 1 (coordinated: t*_e2 = t*_e1 + t_r), the paper's weighted sum."""
     robot = fw.load_robot("youbot_dual_mobile")
     t1, tr = np.array([0.5, -0.2, 0.45]), np.array([0.2, -0.3, -0.2])
     objective = (
@@ -26,7 +26,7 @@ def problem() -> Problem:
         + 0.4 * Motion("arm1", Q_PREV)
         + 0.4 * Motion("arm2", Q_PREV)
     )
-    return Problem(robot, objective)
+    return Problem(robot, objective, priorities=False)
 
 
 @pytest.mark.parametrize("solver", ["cmaes", "de", "sde", "hybrid"])
@@ -201,20 +201,46 @@ def test_hybrid_starts_from_q_prev_and_escalates_when_that_basin_misses():
 
 @pytest.mark.parametrize("solver", ["cmaes_fast", "de"])
 def test_feasibility_ranking_reaches_what_the_weighted_sum_trades_away(solver):
-    """A reachable target with a small weight beside a heavy motion term: ranked by the weighted sum, the
-    metaheuristic stops short of it (its optimum does, 0.17 m off); ranked by Deb's rules (feasibility first) it
-    meets the tolerance, then spends less motion than the configuration the target came from."""
+    """A reachable target with a small weight beside a heavy motion term: ranked by the weighted sum (asked for,
+    or a problem without priorities), the metaheuristic stops short of it (its optimum does, 0.17 m off); ranked
+    by Deb's rules (feasibility first, the default on a problem with priorities) it meets the tolerance, then
+    spends less motion than the configuration the target came from."""
     arm = fw.load_robot("youbot_arm")
     x_goal = arm.random_configurations(np.random.default_rng(1), 1)[0]
     target = arm.frame_placement(x_goal, "ee").translation
-    problem = fw.Problem(arm, 0.05 * fw.Position("ee", target) + 1.0 * fw.Motion("all", arm.middle))
-    runs = {ranking: fw.solve(problem, solver, seed=0, max_iterations=300, tolerance=1e-4,
-                              options={"ranking": ranking}) for ranking in ("weighted", "feasibility")}
-    assert not runs["weighted"].success and runs["weighted"].terms["position[ee]"] > 0.1
-    assert runs["feasibility"].success and runs["feasibility"].terms["position[ee]"] <= 1e-4
-    assert runs["feasibility"].terms["motion[all]"] < np.linalg.norm(x_goal - arm.middle)
+    objective = 0.05 * fw.Position("ee", target) + 1.0 * fw.Motion("all", arm.middle)
+    problem = fw.Problem(arm, objective)
+    weighted = fw.Problem(arm, objective, priorities=False)
+    runs = {"default": fw.solve(problem, solver, seed=0, max_iterations=300, tolerance=1e-4),
+            "weighted": fw.solve(problem, solver, seed=0, max_iterations=300, tolerance=1e-4,
+                                 options={"ranking": "weighted"}),
+            "no priorities": fw.solve(weighted, solver, seed=0, max_iterations=300, tolerance=1e-4)}
+    for name in ("weighted", "no priorities"):
+        assert not runs[name].success and runs[name].terms["position[ee]"] > 0.1
+    assert runs["weighted"].cost == runs["no priorities"].cost  # the same generations
+    assert runs["default"].success and runs["default"].terms["position[ee]"] <= 1e-4
+    assert runs["default"].terms["motion[all]"] < np.linalg.norm(x_goal - arm.middle)
+    explicit = fw.solve(problem, solver, seed=0, max_iterations=300, tolerance=1e-4,
+                        options={"ranking": "feasibility"})
+    np.testing.assert_array_equal(explicit.configuration, runs["default"].configuration)
     with pytest.raises(fw.SolverError, match="ranking"):
         fw.solve(problem, solver, options={"ranking": "lexical"})
+    with pytest.raises(fw.SolverError, match="needs a problem with priorities"):
+        fw.solve(weighted, solver, options={"ranking": "feasibility"})
+
+
+def test_a_task_alone_is_ranked_by_its_weighted_sum():
+    """Without regularizers there is one level: the metaheuristic ranks by the weighted sum, as it always did
+    (the same generations as asking for it), and keeps improving past the tolerance (Deb's rules would stop
+    telling feasible candidates apart)."""
+    arm = fw.load_robot("youbot_arm")
+    target = arm.frame_placement(arm.random_configurations(np.random.default_rng(2), 1)[0], "ee").translation
+    problem = fw.Problem(arm, fw.Position("ee", target))
+    auto = fw.solve(problem, "cmaes_fast", seed=0, max_iterations=200, tolerance=1e-3)
+    weighted = fw.solve(problem, "cmaes_fast", seed=0, max_iterations=200, tolerance=1e-3,
+                        options={"ranking": "weighted"})
+    np.testing.assert_array_equal(auto.configuration, weighted.configuration)
+    assert auto.task_error < 1e-6  # far below the tolerance: still ranked by the error itself
 
 
 def test_hybrid_passes_its_global_options_to_the_global_phase():

@@ -106,7 +106,7 @@ def test_compiled_loop_is_the_ask_tell_loop(bounds):
     robot = fw.load_robot("youbot_dual_mobile")
     prev = robot.middle
     problem = Problem(robot, 1.2 * fw.Position("arm1_ee", [0.5, -0.2, 0.45]) + 0.4 * fw.Motion("all", prev),
-                      bounds=bounds)
+                      bounds=bounds, priorities=False)  # the weighted sum: the compiled loop's cost
     compiled = solve(problem, "cmaes_fast", seed=4, max_iterations=120, initial=prev)
     loop = minimize(problem.cost, (robot.lower, robot.upper), solver="cmaes_fast", rng=np.random.default_rng(4),
                     max_iterations=120, population=30, initial=prev[None], bounds=problem.repair_mode)

@@ -75,12 +75,12 @@ def test_relative_coordination_holds_the_follower_at_the_offset(mobile_dual):
 
 
 def test_cmaes_continues_the_previous_waypoints_distribution(mobile_dual):
-    """Paper 000 with cmaes_fast, 300 iterations per point: starting each point from the Jacobian prediction with the
+    """Paper 000 (its weighted sum) with cmaes_fast, 300 iterations per point: starting each point from the Jacobian prediction with the
     previous point's adapted covariance and a small step is far more accurate than a fresh identity covariance."""
     path = tr.paper000("sinusoidal", 200)[:6]
     runs = {
         name: track(mobile_dual, path, TrackingTask(**PAPER000), solver="cmaes_fast", initial=Q_PREV, seed=0,
-                    options=options, progress=False)
+                    options=options, priorities=False, progress=False)
         for name, options in (("continued", None), ("fresh", {"covariance": None}))
     }
     continued, fresh = (runs[n].position_error[1:].mean() for n in ("continued", "fresh"))

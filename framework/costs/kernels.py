@@ -244,11 +244,14 @@ def residuals_at(x, level, kin, prog, r_out, J_out) -> int:
 
 
 @numba.njit(cache=True)
-def task_errors_at(x, kin, prog, errors):
-    """Each task block's error ``‖r_b‖`` [m or rad] at ``x`` into ``errors``."""
+def task_errors_at(X, kin, prog, errors):
+    """Each task block's error ``‖r_b‖`` [m or rad] at each configuration of ``X`` ``(pop, n)`` into ``errors``
+    ``(pop, blocks)``."""
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    own = workspace(kin, prog, x.shape[0])
+    own = workspace(kin, prog, X.shape[1])
     ws = borrow_ws(own)
-    linearize(borrow(x), TASK, kin, prog, ws, NO, COMPUTE)
-    task_errors(prog, ws[3], errors)
+    X = borrow(X)
+    for m in range(X.shape[0]):
+        linearize(X[m], TASK, kin, prog, ws, NO, COMPUTE)
+        task_errors(prog, ws[3], errors[m])
     keep_alive(own)

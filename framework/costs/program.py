@@ -208,12 +208,18 @@ class Program:
 
     def task_errors(self, x: np.ndarray) -> np.ndarray:
         """``(blocks,)`` each task block's error ``‖r_b‖`` at one configuration ``x`` ``(n,)`` [m, or rad for
-        orientations], in block order."""
+        orientations], in block order; ``(pop, blocks)`` for a population ``x`` ``(pop, n)``."""
         self.refresh()
-        errors = np.empty(self.task_block_rows.size)
+        X = np.ascontiguousarray(np.atleast_2d(x), dtype=float)
+        errors = np.empty((X.shape[0], self.task_block_rows.size))
         if errors.size:
-            task_errors_at(np.ascontiguousarray(x, dtype=float), self.kin, self.prog, errors)
-        return errors
+            task_errors_at(X, self.kin, self.prog, errors)
+        return errors if np.ndim(x) == 2 else errors[0]
+
+    def limits(self, tolerance: float, angle_tolerance: float) -> np.ndarray:
+        """``(blocks,)`` each task block's tolerance: ``angle_tolerance`` [rad] for orientations, ``tolerance``
+        [m] for the others (the limits :meth:`within` compares :meth:`task_errors` with)."""
+        return np.where(np.array(self.task_angular, dtype=bool), angle_tolerance, tolerance)
 
     def within(self, errors: Sequence[float], tolerance: float, angle_tolerance: float, *,
                exact_checked: bool = False) -> bool:

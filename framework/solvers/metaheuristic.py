@@ -1,12 +1,14 @@
 """Every registered metaheuristic as an IK solver: the shared ask/tell loop on the problem's population cost.
 
-Candidates are ranked by the weighted sum (``ranking="weighted"``, the papers), or, with
-``options={"ranking": "feasibility"}`` on a problem with priorities, by Deb's rules: a candidate meeting every
-task tolerance beats one that does not; among those that do, the lower regularizer cost wins; among those that do
-not, the lower task cost (K. Deb, "An efficient constraint handling method for genetic algorithms", Comput.
+Candidates are ranked by Deb's rules when the problem has levels — ``Problem.priorities`` on (the default) and
+regularizers beside the task: a candidate meeting every task tolerance (and inside the limits of a joint-limit
+penalty) beats one that does not; among those that do, the lower regularizer cost wins; among those that do not,
+the lower constraint violation (K. Deb, "An efficient constraint handling method for genetic algorithms", Comput.
 Methods Appl. Mech. Eng. 186 (2000) 311-338). The rules are one scalar per candidate, so every algorithm ranks by
-them unchanged: the regularizer cost for feasible candidates, and an upper bound of it plus the task cost for the
-others (the history is then in those units).
+them unchanged: the regularizer cost for feasible candidates, and an upper bound of it plus the task and penalty
+cost for the others (the history is then in those units). Otherwise — ``priorities=False`` (the papers' sums) or
+a task alone — candidates are ranked by the weighted sum. ``options={"ranking": "weighted"}`` asks for the
+weighted sum on a problem with levels too.
 """
 
 from __future__ import annotations
@@ -24,8 +26,9 @@ from .registry import get_solver
 
 #: Generations of a metaheuristic when ``solve`` is not given a budget (the papers' 1000).
 DEFAULT_ITERATIONS = 1000
-#: How candidates are ranked: the weighted sum, or Deb's feasibility rules on the priority levels.
-RANKINGS = ("weighted", "feasibility")
+#: How candidates are ranked: by the problem (``"auto"``: Deb's rules when it has levels, else the weighted sum),
+#: the weighted sum, or Deb's feasibility rules on the priority levels.
+RANKINGS = ("auto", "weighted", "feasibility")
 
 
 class Metaheuristic(IKSolver):
@@ -43,14 +46,11 @@ class Metaheuristic(IKSolver):
         self.options = dict(options or {})
 
     def defaults(self) -> dict[str, Any]:  # type: ignore[override]
-        return {**get_solver(self.algorithm).DEFAULTS, "ranking": "weighted"}
+        return {**get_solver(self.algorithm).DEFAULTS, "ranking": "auto"}
 
     def solve(self, problem, request: Request) -> Outcome:
         options = dict(self.options)
-        ranking = options.pop("ranking", "weighted")
-        if ranking not in RANKINGS:
-            raise SolverError(f"{self.name}: ranking must be one of {RANKINGS}; got {ranking!r}")
-        cost = feasibility_cost(problem, request) if ranking == "feasibility" and problem.priorities else None
+        cost = feasibility_cost(problem, request) if ranks_by_feasibility(self.name, problem, options) else None
         callback = request.callback
         if request.stop_at_tolerance or request.deadline is not None:
             user = request.callback
@@ -77,6 +77,20 @@ class Metaheuristic(IKSolver):
         return Outcome(run.x, stop, run.iterations, run.evaluations, run.history, settings, run.state)
 
 
+def ranks_by_feasibility(name: str, problem, options: dict[str, Any]) -> bool:
+    """Whether the solver ``name`` ranks by Deb's rules on ``problem``; pops ``"ranking"`` from ``options``.
+    Raises :class:`SolverError` for an unknown ranking, or Deb's rules asked on a problem without priorities."""
+    ranking = options.pop("ranking", "auto")
+    if ranking not in RANKINGS:
+        raise SolverError(f"{name}: ranking must be one of {RANKINGS}; got {ranking!r}")
+    if ranking == "feasibility" and not problem.priorities:
+        raise SolverError(f"{name}: ranking 'feasibility' needs a problem with priorities (Problem(..., "
+                          "priorities=True)); this one is a weighted sum")
+    if ranking == "auto":
+        return bool(problem.priorities and problem.program.has_regularizers)
+    return ranking == "feasibility"
+
+
 def within(problem, x: np.ndarray, request: Request) -> bool:
     """Whether every task term of ``problem`` is within the request's tolerances at ``x``."""
     return problem.program.within(problem.program.task_errors(x).tolist(), request.tolerance,
@@ -85,22 +99,22 @@ def within(problem, x: np.ndarray, request: Request) -> bool:
 
 def feasibility_cost(problem, request: Request) -> Callable[[np.ndarray], np.ndarray]:
     """Deb's rules as a population cost ``(pop, n) -> (pop,)``: the weighted regularizers where every task block
-    is within the request's tolerances, else ``bound + `` the weighted task terms, with ``bound`` above any
-    regularizer cost in the box (every regularizer value is at most its value's scale times the box diagonal)."""
-    task = problem.task_mask
+    is within the request's tolerances and every value term (a joint-limit penalty) is zero, else ``bound + `` the
+    weighted task and value terms (the constraint violation), with ``bound`` above any regularizer cost in the box
+    (every regularizer value is at most its value's scale times the box diagonal)."""
+    levels = np.array([term.level for _, term in problem.objective])
+    regular, penalties = levels == "regularizer", levels == "value"
     weights = problem.weights
     diagonal = float(np.linalg.norm(problem.robot.upper - problem.robot.lower))
-    bound = 10.0 * (1.0 + weights[~task].sum() * (1.0 + diagonal))
+    bound = 10.0 * (1.0 + weights[regular].sum() * (1.0 + diagonal))
     program = problem.program
+    limits = program.limits(request.tolerance, request.angle_tolerance)
 
     def cost(X: np.ndarray) -> np.ndarray:
         values = problem.values(X)
-        F = values[:, ~task] @ weights[~task]
-        for i, x in enumerate(X):
-            errors = program.task_errors(x).tolist()
-            if not program.within(errors, request.tolerance, request.angle_tolerance):
-                F[i] = bound + values[i, task] @ weights[task]
-        return F
+        feasible = np.all(program.task_errors(X) <= limits, axis=1) & np.all(values[:, penalties] <= 0, axis=1)
+        return np.where(feasible, values[:, regular] @ weights[regular],
+                        bound + values[:, ~regular] @ weights[~regular])
 
     return cost
 
