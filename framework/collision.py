@@ -103,6 +103,7 @@ class RobotShape:
         if always > 0:
             self._remove_always_colliding(always)
         self._covers: dict[tuple, SphereCover] = {}
+        self._margined: dict[tuple[int, float], tuple[pin.GeometryModel, pin.GeometryData]] = {}
         self._hulls: dict[int, object] = {}
         self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
@@ -214,6 +215,24 @@ class RobotShape:
             hull = self._hulls[index] = geometry
         return hull
 
+    def _margin_data(self, geometry: pin.GeometryModel, data: pin.GeometryData,
+                     margin: float) -> pin.GeometryData:
+        """``data`` for margin 0; else a data of ``geometry`` whose collision requests have ``margin`` [m] as coal's
+        security margin (pairs closer than it collide), made once per geometry and margin (setting the margin
+        costs ~0.4 µs per pair)."""
+        if margin == 0.0:
+            return data
+        key = (id(geometry), margin)
+        entry = self._margined.get(key)
+        if entry is None or entry[0] is not geometry:
+            if len(self._margined) > 16:
+                self._margined.clear()
+            entry = (geometry, geometry.createData())
+            for request in entry[1].collisionRequests:
+                request.security_margin = margin
+            self._margined[key] = entry
+        return entry[1]
+
     def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData]:
         """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the
         last scene asked."""
@@ -243,12 +262,13 @@ class RobotShape:
         closer than ``margin`` [m] are contacts; with margin 0, pairs penetrating by :data:`TOUCH` or more, or at
         distance exactly 0 (coal's distance between intersecting meshes, which has no depth).
 
-        ``distances=False`` (margin 0 only) is the fast check: coal's collision test on every pair and distances
-        (penetration depths) only for the pairs in contact — about 50x faster on meshes; the report's
-        ``min_distance`` is then the deepest contact's, or NaN (not measured) when there is none.
+        ``distances=False`` is the fast check: coal's collision test on every pair (with ``margin`` as its
+        security margin: pairs closer than it count) and distances only for the pairs it flags — about 50x faster
+        on meshes; the report's ``min_distance`` is then the closest flagged pair's, or NaN (not measured) when
+        there is none.
         """
-        if not distances and margin != 0.0:
-            raise TaskError("the fast check (distances=False) finds contacts at margin 0 only; ask for distances")
+        if not (np.isfinite(margin) and margin >= 0.0):
+            raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
         q = self.robot.to_pinocchio(np.asarray(x, dtype=float))
         models = [(self.geometry, self._geometry_data)] if self_pairs else []
         if scene is not None:
@@ -260,6 +280,7 @@ class RobotShape:
                 pin.computeDistances(self.robot.model, self._data, geometry, data, q)
                 found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
             else:
+                data = self._margin_data(geometry, data, margin)
                 any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
                 found = [(k, float(pin.computeDistance(geometry, data, k).min_distance))
                          for k, r in enumerate(data.collisionResults) if r.isCollision()] if any_contact else []

@@ -150,13 +150,24 @@ class Problem:
             self.names, self.weights, values, values @ self.program.weights, values[:, self.task_mask].sum(axis=1)
         )
 
-    def collisions(self, x: np.ndarray) -> CollisionReport | None:
+    def collisions(self, x: np.ndarray, *, margins: bool = False) -> CollisionReport | None:
         """The exact collision check of the problem's collision terms at ``x`` ``(n,)``, as one report (coal on
-        the URDF's geometry; ``None`` without collision terms)."""
+        the URDF's geometry; ``None`` without collision terms); with ``margins``, pairs closer than their term's
+        margin count as contacts too."""
         if not self.checks_collisions:
             return None
         x = self.robot.check_population(x)[0]
-        return merge_reports([t.collisions(self.robot, x) for _, t in self.objective if t.checks_collisions])
+        return merge_reports([t.collisions(self.robot, x, margin=margins) for _, t in self.objective
+                              if t.checks_collisions])
+
+    @cached_property
+    def without_collision_terms(self) -> Problem | None:
+        """The same problem without its collision terms (same term objects: targets moved on one move on both),
+        or ``None`` when it has none."""
+        if not self.checks_collisions:
+            return None
+        kept = tuple((w, t) for w, t in self.objective if not t.checks_collisions)
+        return Problem(self.robot, Objective(kept), bounds=self.bounds, priorities=self.priorities) if kept else None
 
     def errors(self, x: np.ndarray) -> dict[str, float]:
         """Each task block's error at one configuration ``x`` ``(n,)``: distance [m] for position-like terms,

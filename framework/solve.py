@@ -40,7 +40,7 @@ class IKResult:
         cost: objective value at ``configuration``.
         terms: unweighted value of every term, by name.
         task_error: sum of the unweighted task terms (position [m] + orientation ``sin(φ/2)`` + ...: the papers'
-            measure).
+            measure), collision terms left out (``collisions`` reports contacts).
         errors: each task term's error in its own unit, by name: distance [m] for positions and relative
             positions, angle φ [rad] for orientations (a pose gives ``name.distance`` and ``name.angle``; a
             collision term its deepest sphere overlap [m]).
@@ -204,7 +204,7 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     error_list = errors.tolist()
     # an interrupted solve is never a success, whatever its last point (the user stopped it before its end);
     # with collision terms the exact check has the last word, not their sphere rows
-    collisions = problem.collisions(x)
+    collisions = problem.collisions(x) if outcome.collisions is None else outcome.collisions
     success = outcome.stop_reason != "interrupted" and program.within(
         error_list, request.tolerance, request.angle_tolerance, exact_checked=collisions is not None) \
         and (collisions is None or not collisions.colliding)

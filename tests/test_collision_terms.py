@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -100,3 +102,90 @@ def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):
         + fw.Pose(hands[1], robot.frame_placement(x, hands[1]))
     result = fw.solve(fw.Problem(robot, objective + term), seed=0, time_budget=5.0)  # the term packed: no new warning
     assert result.success and not shape.check(result.configuration).colliding  # coal, on the exact meshes
+
+
+def test_contact_rows_cost_nothing_where_the_descent_stays_clear(rng):
+    """The engine descends without the contact rows first (they are evaluated when the rest is met): where the
+    free descent ends clear of them (paper 000's four targets from its q_prev), the descent with a SelfCollision
+    term is the free problem's, step for step (the same iterations and configuration, up to the last polishing
+    step's rounding, which sees the zero contact rows); where the free
+    answer is in contact (random targets from random starts: the dual youBot's arms are close), the engine goes
+    on and ends with every row within tolerance. A trivial method — the free answer — is in contact there."""
+    from framework.engine import LocalSettings, solve_local
+    from framework.taskfile import load_task
+
+    task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
+    robot = task.robot
+    shape = fw.RobotShape(robot)
+    settings = LocalSettings(tolerance=1e-9, restarts=False, regularize=False, max_iterations=200)
+    starts = [(c.problem.previous, [t.target for _, t in c.problem.objective if t.is_task]) for c in task.cases]
+    for _ in range(10):
+        x = robot.random_configurations(rng, 2)
+        starts.append((x[1], [robot.frame_placement(x[0], f).translation for f in ("arm1_ee", "arm2_ee")]))
+    same = contact = 0
+    for x0, (t1, t2) in starts:
+        objective = fw.Position("arm1_ee", t1) + fw.Position("arm2_ee", t2)
+        free = fw.Problem(robot, objective)
+        whole = fw.Problem(robot, objective + fw.SelfCollision(shape, margin=0.005))
+        a = solve_local(free.program, x0, 0, settings)
+        b = solve_local(whole.program, x0, 0, settings)
+        if not a.reached:
+            continue
+        rows = whole.program.task_errors(a.x)[2:]  # the collision term's rows at the free answer
+        if np.all(rows <= 1e-9):
+            np.testing.assert_allclose(b.x, a.x, rtol=0, atol=1e-9)  # the polish sees the (zero) contact rows
+            assert b.iterations == a.iterations
+            same += 1
+        elif b.reached:
+            assert np.all(whole.program.task_errors(b.x) <= 1e-9)
+            contact += 1
+    assert same >= 3 and contact >= 1
+
+
+def test_a_loose_cover_keeps_the_answer_without_the_terms_when_coal_finds_it_clear(erd):
+    """PR2's meshes are covered by spheres fatter than the links: where the problem without its collision
+    terms has an answer coal finds clear (by the terms' margin), the hybrid returns that answer (the same
+    configuration as solving that problem), a success whose exact check is the one it made; its collision
+    term's sphere rows may overlap there, and the task error leaves them out."""
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                          joints=["torso_lift_joint"] + [f"{s}_{j}" for s in "lr" for j in
+                                                         ("shoulder_pan_joint", "shoulder_lift_joint",
+                                                          "upper_arm_roll_joint", "elbow_flex_joint")])
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    rng = np.random.default_rng(3)
+    kept = 0
+    for seed in range(20):
+        x = robot.random_configurations(rng, 1)[0]
+        if shape.check(x, distances=False).colliding:
+            continue
+        hands = [robot.frame_placement(x, f).translation for f in robot.end_effectors[:2]]
+        objective = fw.Position(robot.end_effectors[0], hands[0]) + fw.Position(robot.end_effectors[1], hands[1]) \
+            + 0.1 * fw.Motion("all", robot.middle)
+        problem = fw.Problem(robot, objective + fw.SelfCollision(shape, margin=0.01))
+        result = fw.solve(problem, seed=seed, tolerance=1e-9)
+        if not result.settings["clear_first"]:
+            continue
+        free = fw.solve(problem.without_collision_terms, seed=seed, tolerance=1e-9)
+        np.testing.assert_array_equal(result.configuration, free.configuration)
+        assert result.success and not result.collisions.colliding
+        assert shape.check(result.configuration).min_distance >= 0.01  # the margin, by coal's distances
+        assert result.task_error == pytest.approx(free.task_error, abs=1e-15)
+        kept += 1
+    assert kept >= 3
+
+
+def test_the_fast_check_with_a_margin_finds_the_pairs_closer_than_it(erd, rng):
+    """``check(x, margin, distances=False)`` (coal's security margin) flags exactly the pairs whose distance
+    (coal's distance computation on every pair) is below the margin, on PR2's meshes and the youBot's spheres."""
+    pr2 = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                        joints=["torso_lift_joint", "l_shoulder_pan_joint", "l_elbow_flex_joint",
+                                "r_shoulder_pan_joint", "r_elbow_flex_joint"])
+    for robot in (pr2, fw.load_robot("youbot_dual_mobile")):
+        shape = fw.RobotShape(robot)
+        for x in robot.random_configurations(rng, 15):
+            for margin in (0.0, 0.02, 0.05):
+                fast = shape.check(x, margin, distances=False)
+                full = shape.check(x, margin)
+                assert {(c.a, c.b) for c in fast.contacts} == {(c.a, c.b) for c in full.contacts}
+    with pytest.raises(TaskError, match="margin"):
+        shape.check(robot.middle, -0.01, distances=False)

@@ -30,20 +30,25 @@ def plate():
 
 
 def test_a_plate_just_above_a_table_is_reached_on_hulls(plate):
-    """Target: the plate's centre 3 mm above its contact height. Its sphere cover sticks out of the 2 cm plate by
-    centimetres, so the sphere model keeps it higher (multistart_lm, which has no hull steps, misses); the hybrid
-    reaches it on the plate's own box, coal finds no contact and the distance to the table is the closed form's
-    3 mm (plate bottom at z − HALF, table top at 0)."""
+    """Target: the plate's centre 3 mm above its contact height, with a motion term pulling the plate to a 0.3 rad
+    tilt (its edge 3 cm into the table: the answer without the collision term is in contact). Its sphere cover
+    sticks out of the 2 cm plate by centimetres, so the sphere model keeps it higher (multistart_lm, which has no
+    hull steps, misses); the hybrid reaches it on the plate's own box, coal finds no contact and the distance to
+    the table is the closed form's (plate bottom at z − HALF cos θ − 0.1 |sin θ|, table top at 0)."""
     robot, shape = plate
     cover = shape.cover()
     assert cover.radii.max() > 0.03  # the reason the spheres cannot get there (a trivial check of the premise)
     target = np.array([0.0, 0.0, HALF + 0.003])
-    problem = fw.Problem(robot, fw.Position("plate", target) + fw.Obstacles(shape, [TABLE]))
+    objective = fw.Position("plate", target) + fw.Obstacles(shape, [TABLE]) + 0.1 * fw.Motion("all", [0.0, 0.3])
+    problem = fw.Problem(robot, objective)
+    free = fw.solve(problem.without_collision_terms, seed=0, tolerance=1e-6)
+    assert free.success and shape.check(free.configuration, scene=fw.Scene((TABLE,)), distances=False).colliding
     spheres_only = fw.solve(problem, "multistart_lm", seed=0, tolerance=1e-6)
     assert not spheres_only.success
     assert np.linalg.norm(robot.frame_placement(spheres_only.configuration, "plate").translation - target) > 0.005
     result = fw.solve(problem, seed=0, tolerance=1e-6)
     assert result.success and not result.collisions.colliding
+    assert result.settings["on_hulls"] and not result.settings["clear_first"]
     reached = robot.frame_placement(result.configuration, "plate")
     assert np.linalg.norm(reached.translation - target) <= 1e-6
     assert result.errors["obstacles"] > 0.005  # the sphere rows still overlap the table: they did not decide
@@ -105,8 +110,9 @@ def test_hull_steps_only_where_the_spheres_are_looser(plate, erd):
 
 def test_a_batch_reaches_the_plate_targets_as_single_solves_do(plate):
     """``solve_batch`` over plate targets just above the table: the items the compiled engine leaves short (the
-    sphere rows) are solved as ``solve`` solves them (item ``i`` with seed ``i``), hull steps included, and count
-    as successes by the exact check like the single solves: the same configurations."""
+    sphere rows) are solved as ``solve`` solves them (item ``i`` with seed ``i``: the problem without its
+    collision term first, its answer kept when coal finds it clear), and count as successes by the exact check
+    like the single solves: the same configurations."""
     robot, shape = plate
     targets = [[0.0, 0.0, HALF + h] for h in (0.002, 0.004, 0.006)]
     problem = fw.Problem(robot, fw.Position("plate", targets[0]) + fw.Obstacles(shape, [TABLE]))
@@ -115,7 +121,7 @@ def test_a_batch_reaches_the_plate_targets_as_single_solves_do(plate):
     for i, target in enumerate(targets):
         single = fw.solve(fw.Problem(robot, fw.Position("plate", target) + fw.Obstacles(shape, [TABLE])), seed=i,
                           tolerance=1e-6)
-        assert single.success and single.settings["on_hulls"]
+        assert single.success and single.settings["clear_first"]
         np.testing.assert_array_equal(batch.configurations[i], single.configuration)
         reached = robot.frame_placement(batch.configurations[i], "plate").translation
         assert np.linalg.norm(reached - target) <= 1e-6

@@ -111,9 +111,10 @@ class Term:
             rows.append(np.concatenate([b.params for b in probe.blocks(robot) or ()]))
         return np.array(rows, dtype=float).reshape(len(rows), -1)
 
-    def collisions(self, robot: Robot, x: np.ndarray) -> CollisionReport | None:
+    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport | None:
         """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; the
-        collision terms answer with coal on the exact geometry, and a solve is a success only without contacts)."""
+        collision terms answer with coal on the exact geometry, and a solve is a success only without contacts);
+        with ``margin``, pairs closer than the term's margin count as contacts too."""
         return None
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:

@@ -110,9 +110,10 @@ class SelfCollision(Term):
         if robot is not self.shape.robot:
             raise TaskError(f"{self.name} was built for robot {self.shape.robot.name!r}, not this one")
 
-    def collisions(self, robot: Robot, x: np.ndarray) -> CollisionReport:
-        """The robot's own pairs in contact at ``x`` on the exact geometry (coal's fast check)."""
-        return self.shape.check(x, distances=False)
+    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport:
+        """The robot's own pairs in contact (closer than the margin, with ``margin``) at ``x`` on the exact
+        geometry (coal's fast check)."""
+        return self.shape.check(x, self.margin if margin else 0.0, distances=False)
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every checked pair of the robot's own geometries, as convex hulls (those included that the sphere
@@ -191,10 +192,11 @@ class Obstacles(Term):
 
     validate = SelfCollision.validate
 
-    def collisions(self, robot: Robot, x: np.ndarray) -> CollisionReport:
-        """The moving geometries in contact with the obstacles at ``x``, on the exact geometry (coal's fast
-        check)."""
-        return self.shape.check(x, scene=self.scene, self_pairs=False, distances=False)
+    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport:
+        """The moving geometries in contact with the obstacles (closer than the margin, with ``margin``) at
+        ``x``, on the exact geometry (coal's fast check)."""
+        return self.shape.check(x, self.margin if margin else 0.0, scene=self.scene, self_pairs=False,
+                                distances=False)
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every moving geometry's convex hull against every obstacle."""

@@ -67,7 +67,9 @@ def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
 
 def _kind(level: int, blocks: tuple[Block, ...] | None) -> str:
     """What a term measures, for reports: ``"position"`` (all its blocks in metres), ``"orientation"`` (all in
-    radians), ``"motion"`` (a regularizer), ``"other"``."""
+    radians), ``"motion"`` (a regularizer), ``"collision"`` (contact rows: clearances, not errors), ``"other"``."""
+    if blocks and all(b.kind in (B.SPHERES, B.SOLIDS) for b in blocks):
+        return "collision"
     tolerances = {b.tolerance for b in blocks or ()}
     if level == B.LEVEL_TASK and tolerances == {B.TOL_LINEAR}:
         return "position"
@@ -145,7 +147,10 @@ class _Layout:
                 names.append(term.name + (suffix if len(blocks) > 1 else ""))
         self.task_blocks = tuple(names)
         self.names = unique_labels(t.name for t in terms)  # the problem's term labels
-        self.task_terms = tuple(k for k, level in enumerate(levels) if level == B.LEVEL_TASK)
+        # the task terms a task error sums: the collision terms' clearances are left out (the exact check reports
+        # contacts; their sphere rows may overlap at an answer coal finds clear)
+        self.task_terms = tuple(k for k, level in enumerate(levels)
+                                if level == B.LEVEL_TASK and self.term_kinds[k] != "collision")
         self._bflt: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_checked_exactly = tuple(bool(terms[k].checks_collisions) for k in self.block_term[task].tolist())

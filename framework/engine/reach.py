@@ -10,6 +10,11 @@ drawn uniformly in the box from a seeded stream (:mod:`~framework.engine.draws`)
 block is held to its own tolerance (metres for positions, radians for orientations), and the clock is read at
 every iteration, so a time budget is kept to within one iteration (a few µs). Constants tuned on 300 FK-sampled
 poses per arm (UR5, Panda, Baxter; see benchmarks/pose_ik.py).
+
+Contact rows are taken lazily: each start first descends without the collision blocks (``SPHERES``, ``SOLIDS``,
+the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
+blocks are evaluated, and only if one is violated does the descent go on with every block, from there. Most
+answers are clear of contact (an active-set view of the inequalities: the inactive ones cost one evaluation).
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, is_hinge
+from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, SOLIDS, SPHERES, is_hinge
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, rows_clear, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
@@ -107,6 +112,29 @@ def hinge_violated(prog, r) -> bool:
 
 
 @numba.njit(cache=True)
+def without_contacts(bint):
+    """A copy of the block table ``bint`` with the collision blocks (``SPHERES``, ``SOLIDS``) of the task taken out
+    of it (level 0: no level selects them), and whether there were any."""
+    lazy = bint.copy()
+    found = False
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] == LEVEL_TASK and (bint[b, KIND] == SPHERES or bint[b, KIND] == SOLIDS):
+            lazy[b, LEVEL] = 0
+            found = True
+    return lazy, found
+
+
+@numba.njit(cache=True)
+def task_row_count(bint) -> int:
+    """Residual rows of the task blocks of the block table ``bint``."""
+    rows = 0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] == LEVEL_TASK:
+            rows += bint[b, ROWS]
+    return rows
+
+
+@numba.njit(cache=True)
 def squared_norm(r, m) -> float:
     s = 0.0
     for i in range(m):
@@ -120,7 +148,8 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     """Drive every task block within tolerance from ``x (n,)``, then from random configurations in the box.
 
     Args:
-        x: first start; on return the configuration reached, or the best one seen (smallest ``‖r‖``).
+        x: first start; on return the configuration reached, or the best one seen (smallest ``‖r‖`` over every
+            block; over the blocks but the contact rows if no descent got to evaluate those).
         restarts: how many times a stalled descent may restart from a configuration drawn from ``rng`` (the
             stream ``uint64 (1,)`` of :mod:`~framework.engine.draws`, advanced).
         tol_linear, tol_angular: tolerances of position-like [m] and orientation [rad] blocks.
@@ -139,28 +168,50 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     own_ws, own_trial = workspace(kin, prog, n), workspace(kin, prog, n)
     ws, trial = borrow_ws(own_ws), borrow_ws(own_trial)
+    lazy_bint, has_contacts = without_contacts(prog[0])
+    lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
+    lazy = has_contacts  # the descent sees the blocks without the contact rows first
+    cur = lazy_prog if lazy else prog
     project(x, lower, upper, box_wrap)
-    m = linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
-    k = min(m, n)
-    own = np.empty(2 * k * k + max(k, n) + 3 * n + m * n)  # one allocation, carved into the scratch arrays
+    m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+    full = task_row_count(prog[0])
+    k = min(full, n)
+    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n)  # one allocation, carved into the scratch arrays
     scratch = borrow(own)
     A, L = scratch[: k * k], scratch[k * k : 2 * k * k]  # flat: damped_step shapes them
     a = 2 * k * k
     y = scratch[a : a + max(k, n)]
     a += max(k, n)
     dx, xt, best = scratch[a : a + n], scratch[a + n : a + 2 * n], scratch[a + 2 * n : a + 3 * n]
-    Jc = scratch[a + 3 * n : a + 3 * n + m * n].reshape((m, n))
-    best[:] = x
+    best_lazy = scratch[a + 3 * n : a + 4 * n]  # the best seen without the contact rows
+    a += 4 * n
+    Jc_all = scratch[a : a + full * n]
+    Jc = Jc_all[: m * n].reshape((m, n))
     e = squared_norm(ws[3], m)
-    best_e = e
+    best_e, best_lazy_e = np.inf, np.inf
+    if lazy:
+        best_lazy[:], best_lazy_e = x, e
+    else:
+        best[:], best_e = x, e
     damping, checkpoint, since = DAMPING_START, e, 0
     iterations, evaluations, restarted = 0, 1, 0
     status = ITERATIONS
     while True:
-        task_errors(prog, ws[3], errors)
-        if within_tolerance(prog, errors, tol_linear, tol_angular):
-            status = REACHED
-            break
+        task_errors(cur, ws[3], errors)
+        if within_tolerance(cur, errors, tol_linear, tol_angular):
+            if not lazy:
+                status = REACHED
+                break
+            lazy, cur = False, prog  # the rest is met: the contact rows now; the descent goes on with them
+            m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+            Jc = Jc_all[: m * n].reshape((m, n))
+            evaluations += 1
+            e = squared_norm(ws[3], m)
+            if e < best_e:
+                best_e = e
+                best[:] = x
+            damping, checkpoint, since = DAMPING_START, e, 0
+            continue
         if iterations >= max_iterations:
             break
         if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
@@ -172,17 +223,20 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, TASK, kin, prog, trial, NO, COMPUTE)  # poses only: most rejected steps end here
+            linearize(xt, TASK, kin, cur, trial, NO, COMPUTE)  # poses only: most rejected steps end here
             evaluations += 1
             et = squared_norm(trial[3], m)
             if et < e:
                 accepted = True
-                linearize(xt, TASK, kin, prog, trial, YES, JACOBIANS_FROM_POSES)
+                linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
                 ws, trial = trial, ws
                 x[:] = xt
                 e = et
                 damping = max(damping * DAMPING_DOWN, DAMPING_MIN)
-                if e < best_e:
+                if lazy and e < best_lazy_e:
+                    best_lazy_e = e
+                    best_lazy[:] = x
+                elif not lazy and e < best_e:
                     best_e = e
                     best[:] = x
         if not accepted:
@@ -203,9 +257,17 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
                 if not hinge_violated(prog, ws[3]):
                     break
             restarted += 1
-            linearize(x, TASK, kin, prog, ws, YES, JACOBIANS_FROM_POSES)
+            if has_contacts:  # a new start descends without the contact rows first, again
+                lazy, cur = True, lazy_prog
+                m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+                Jc = Jc_all[: m * n].reshape((m, n))
+            else:
+                linearize(x, TASK, kin, cur, ws, YES, JACOBIANS_FROM_POSES)
             e = squared_norm(ws[3], m)
-            if e < best_e:
+            if lazy and e < best_lazy_e:
+                best_lazy_e = e
+                best_lazy[:] = x
+            elif not lazy and e < best_e:
                 best_e = e
                 best[:] = x
             damping, checkpoint, since = DAMPING_START, e, 0
@@ -229,7 +291,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             e = et
         task_errors(prog, ws[3], errors)
     else:
-        x[:] = best
+        x[:] = best if best_e < np.inf else best_lazy
         linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
         task_errors(prog, ws[3], errors)
     term_values(x, prog, ws, values)

@@ -8,6 +8,14 @@
 2. If that misses the task, a short global phase of a metaheuristic (``cmaes_fast``, 30 generations) from a
    uniform start picks another point for the engine (the better of the two is kept). An explicit
    ``global_iterations`` runs the global phase first instead.
+   With collision terms whose spheres cover meshes, boxes or cylinders (a loose cover, fatter than the links;
+   with priorities), each descent first solves the problem without them (in the warm start's basin, then with
+   restarts); if coal's exact check finds that answer clear (by the terms' margins), it is the answer: the
+   terms' inequalities are inactive there, so it meets the whole problem (and its regularizers are at their
+   optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on near misses
+   the exact geometry does not have. Otherwise the engine solves the whole problem from the same start. (Where
+   every geometry is a sphere of the cover, the engine's own lazy contact rows, :mod:`~framework.engine.reach`,
+   are as exact and cheaper.)
    Whenever the engine ends short of the task with a collision term's sphere rows active, its last steps are
    taken again on the links' convex hulls (:func:`framework.engine.hull_reach.hull_reach`): the spheres are
    fatter than the links, the hulls hold them tightly, and the exact check decides success anyway.
@@ -27,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ..engine import LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from ..engine import LocalResult, LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
 from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
@@ -106,9 +114,9 @@ class Hybrid(IKSolver):
         iterations = evaluations = restarts = 0
         history: list[float] = []
 
-        def engine(x: np.ndarray, settings: LocalSettings = settings):
+        def engine(x: np.ndarray, settings: LocalSettings = settings, program=problem.program):
             nonlocal iterations, evaluations, restarts
-            result = solve_local(problem.program, x, draws, settings, deadline=request.deadline)
+            result = solve_local(program, x, draws, settings, deadline=request.deadline)
             iterations, evaluations = iterations + result.iterations, evaluations + result.evaluations
             restarts += result.restarts
             counter.report(result.x)
@@ -145,15 +153,34 @@ class Hybrid(IKSolver):
             clear = hulled.reached and not problem.collisions(hulled.x).colliding  # nested pairs have no rows
             return hulled if clear else result
 
-        escalated = False
+        def clear_first(x: np.ndarray, settings: LocalSettings):
+            """The problem without its collision terms from ``x``: its answer as the whole problem's, and the
+            check, when coal finds it clear by the terms' margins (the terms' inequalities are inactive there);
+            else ``(None, None)``."""
+            result = engine(x, settings, problem.without_collision_terms.program)
+            if not result.reached:
+                return None, None
+            report = problem.collisions(result.x, margins=True)
+            if report.colliding:
+                return None, None
+            whole = LocalResult(result.x, True, "reached", problem.program.task_errors(result.x), result.iterations,
+                                result.evaluations, result.restarts, result.regularized, None,
+                                problem.values(result.x[None])[0])
+            return whole, report
+
+        escalated, check, best = False, None, None
+        first = settings if start == "middle" or not o.restarts else _in_basin(settings)
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
-        if start == "middle" or not o.restarts:
-            best = hulls(engine(x0))
-        else:  # a warm start's basin first (a slow descent near a singularity is not a reason to leave it) ...
-            best = hulls(engine(x0, _in_basin(settings)))
-            if not best.reached and request.time_left() > 0:  # ... then random restarts
-                best = better(best, hulls(engine(x0)))
+        loose = not o.global_iterations and problem.priorities and problem.program.loose_hulls \
+            and problem.without_collision_terms is not None
+        if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
+            best, check = clear_first(x0, first)
+        if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
+            best = hulls(engine(x0, first))  # to leave it), then random restarts
+            if not best.reached and first is not settings and request.time_left() > 0:
+                found, check = clear_first(x0, settings) if loose else (None, None)
+                best = found if found is not None else better(best, hulls(engine(x0)))
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = hulls(engine(global_phase(None, GLOBAL_ITERATIONS)))
@@ -179,9 +206,10 @@ class Hybrid(IKSolver):
         report = {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
                   "restart_count": restarts, "regularized": best.regularized, "weighted": weighted,
                   "hull_runs": len(hull_runs), "on_hulls": any(best is r for r in hull_runs),
+                  "clear_first": check is not None,
                   "population": request.population}
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
-                       task_errors=errors, values=values)
+                       task_errors=errors, values=values, collisions=check if best is not None and x is best.x else None)
 
 
 def _in_basin(settings: LocalSettings) -> LocalSettings:

@@ -63,7 +63,8 @@ class Request(NamedTuple):
 class Outcome(NamedTuple):
     """What a solver found: the configuration ``x`` ``(n,)`` and how it got there (``history``: the best cost
     after each iteration, ``None`` for just the final cost; ``task_errors`` and ``values``: each task block's
-    error and each term's value at ``x``, when the solver computed them on the way)."""
+    error and each term's value at ``x``, when the solver computed them on the way; ``collisions``: the exact
+    check at ``x`` likewise)."""
 
     x: np.ndarray
     stop_reason: str
@@ -74,6 +75,7 @@ class Outcome(NamedTuple):
     state: dict[str, Any] = {}
     task_errors: np.ndarray | None = None
     values: np.ndarray | None = None
+    collisions: Any = None  # the exact collision check at x, when the solver made it (a CollisionReport)
 
 
 class BatchPlan(NamedTuple):
