@@ -209,7 +209,7 @@ class Hybrid(IKSolver):
                   "clear_first": check is not None,
                   "population": request.population}
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
-                       task_errors=errors, values=values, collisions=check if best is not None and x is best.x else None)
+                       task_errors=errors, values=values, collisions=check)  # check: made at x, when made
 
 
 def _in_basin(settings: LocalSettings) -> LocalSettings:
