@@ -25,7 +25,7 @@ from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve
-from .reach import bounded_step, held, project, squared_norm
+from .reach import bounded_step, held, project, rows_of, squared_norm
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
 MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
@@ -38,17 +38,6 @@ RESTORE_STEPS, LINE_SEARCH = 4, 4
 RESTORE_DAMPING = 1e-14
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
-
-
-@numba.njit(cache=True)
-def _rows_of(prog, level) -> int:
-    bint = prog[0]
-    rows = 0
-    for b in range(bint.shape[0]):
-        lv = bint[b, LEVEL]
-        if (level >= 0 and lv == level) or (level < 0 and lv != 0):
-            rows += bint[b, ROWS]
-    return rows
 
 
 @numba.njit(cache=True)
@@ -176,7 +165,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     ``NOT_APPLICABLE`` (no regularizer, or no freedom left).
     """
     n = x.shape[0]
-    m, q = _rows_of(prog, TASK), _rows_of(prog, REGULARIZERS)
+    m, q = rows_of(prog, TASK), rows_of(prog, REGULARIZERS)
     stats[0], stats[1], stats[2] = 0, 0, 0
     hinge = _hinge_rows(prog, m)
     equalities = 0

@@ -125,11 +125,13 @@ def without_contacts(bint):
 
 
 @numba.njit(cache=True)
-def task_row_count(bint) -> int:
-    """Residual rows of the task blocks of the block table ``bint``."""
+def rows_of(prog, level) -> int:
+    """Residual rows of the blocks of ``level`` (``-1``: levels 1 and 2) in ``prog``."""
+    bint = prog[0]
     rows = 0
     for b in range(bint.shape[0]):
-        if bint[b, LEVEL] == LEVEL_TASK:
+        lv = bint[b, LEVEL]
+        if (level >= 0 and lv == level) or (level < 0 and lv != 0):
             rows += bint[b, ROWS]
     return rows
 
@@ -174,7 +176,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     cur = lazy_prog if lazy else prog
     project(x, lower, upper, box_wrap)
     m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
-    full = task_row_count(prog[0])
+    full = rows_of(prog, TASK)
     k = min(full, n)
     own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n)  # one allocation, carved into the scratch arrays
     scratch = borrow(own)
@@ -182,17 +184,14 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     a = 2 * k * k
     y = scratch[a : a + max(k, n)]
     a += max(k, n)
-    dx, xt, best = scratch[a : a + n], scratch[a + n : a + 2 * n], scratch[a + 2 * n : a + 3 * n]
-    best_lazy = scratch[a + 3 * n : a + 4 * n]  # the best seen without the contact rows
+    dx, xt = scratch[a : a + n], scratch[a + n : a + 2 * n]
+    best = scratch[a + 2 * n : a + 4 * n].reshape((2, n))  # the best seen with every block [0], without contacts [1]
     a += 4 * n
     Jc_all = scratch[a : a + full * n]
     Jc = Jc_all[: m * n].reshape((m, n))
     e = squared_norm(ws[3], m)
-    best_e, best_lazy_e = np.inf, np.inf
-    if lazy:
-        best_lazy[:], best_lazy_e = x, e
-    else:
-        best[:], best_e = x, e
+    best_e = np.full(2, np.inf)  # their ‖r‖², each in its own view
+    best_e[int(lazy)], best[int(lazy)] = e, x
     damping, checkpoint, since = DAMPING_START, e, 0
     iterations, evaluations, restarted = 0, 1, 0
     status = ITERATIONS
@@ -207,9 +206,8 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             Jc = Jc_all[: m * n].reshape((m, n))
             evaluations += 1
             e = squared_norm(ws[3], m)
-            if e < best_e:
-                best_e = e
-                best[:] = x
+            if e < best_e[0]:
+                best_e[0], best[0] = e, x
             damping, checkpoint, since = DAMPING_START, e, 0
             continue
         if iterations >= max_iterations:
@@ -233,12 +231,8 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
                 x[:] = xt
                 e = et
                 damping = max(damping * DAMPING_DOWN, DAMPING_MIN)
-                if lazy and e < best_lazy_e:
-                    best_lazy_e = e
-                    best_lazy[:] = x
-                elif not lazy and e < best_e:
-                    best_e = e
-                    best[:] = x
+                if e < best_e[int(lazy)]:
+                    best_e[int(lazy)], best[int(lazy)] = e, x
         if not accepted:
             damping *= DAMPING_UP
         if e < PROGRESS * checkpoint:
@@ -264,12 +258,8 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             else:
                 linearize(x, TASK, kin, cur, ws, YES, JACOBIANS_FROM_POSES)
             e = squared_norm(ws[3], m)
-            if lazy and e < best_lazy_e:
-                best_lazy_e = e
-                best_lazy[:] = x
-            elif not lazy and e < best_e:
-                best_e = e
-                best[:] = x
+            if e < best_e[int(lazy)]:
+                best_e[int(lazy)], best[int(lazy)] = e, x
             damping, checkpoint, since = DAMPING_START, e, 0
     if status == REACHED:
         for _ in range(polish):  # quadratic convergence: one or two steps take it to machine precision
@@ -291,7 +281,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             e = et
         task_errors(prog, ws[3], errors)
     else:
-        x[:] = best if best_e < np.inf else best_lazy
+        x[:] = best[0] if best_e[0] < np.inf else best[1]
         linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
         task_errors(prog, ws[3], errors)
     term_values(x, prog, ws, values)
