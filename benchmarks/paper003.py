@@ -32,14 +32,13 @@ import shapely
 import shapely.plotting
 
 import framework as fw
+from framework.baselines.solver import BUSS
 from framework.fabrik import (
     BaseOrientation,
     Environment,
     MFabrik,
     MobileArm,
-    ReachResult,
 )
-from framework.fabrik.jacobian import JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
 from framework.fabrik.tracking import Tracking, track
 from framework.taskfile import load_task
 
@@ -95,6 +94,7 @@ class Scenario:
     targets: np.ndarray
     start: np.ndarray
     orientation: BaseOrientation
+    task: object  # the reach task file (framework.fabrik.taskfile.ReachTask)
 
 
 def scenarios(robot: fw.Robot) -> list[Scenario]:
@@ -102,7 +102,8 @@ def scenarios(robot: fw.Robot) -> list[Scenario]:
     out = []
     for name in ("square", "corridor", "l_shape"):
         task = load_task(TASKS_DIR / f"paper003_obstacles_{name}.toml")
-        out.append(Scenario(name, task.description, task.environment, task.targets, task.start, task.orientation))
+        out.append(Scenario(name, task.description, task.environment, task.targets, task.start, task.orientation,
+                            task))
     return out
 
 
@@ -114,13 +115,13 @@ def run_table(solvers: dict, targets: np.ndarray, starts: np.ndarray) -> dict[st
     table: dict[str, list[dict[str, float]]] = {}
     for name, solver in solvers.items():
         for target, x0 in zip(targets[:5], starts[:5]):  # warm-up: first calls allocate
-            solver.solve(target, x0, tolerance=1e-3, max_iterations=MAX_ITERATIONS)
+            solver(target, x0, tolerance=1e-3, max_iterations=MAX_ITERATIONS)
         rows = []
         for tol_mm in TOLERANCES_MM:
             results, cpu = [], []
             for t, x0 in zip(targets, starts):
                 clock = time.process_time()
-                results.append(solver.solve(t, x0, tolerance=tol_mm * 1e-3, max_iterations=MAX_ITERATIONS))
+                results.append(solver(t, x0, tolerance=tol_mm * 1e-3, max_iterations=MAX_ITERATIONS))
                 cpu.append(time.process_time() - clock)
             rows.append(summary(results, np.array(cpu)))
             print(f"  {name:22s} {tol_mm:6g} mm  {rows[-1]}", flush=True)
@@ -128,7 +129,7 @@ def run_table(solvers: dict, targets: np.ndarray, starts: np.ndarray) -> dict[st
     return table
 
 
-def summary(results: list[ReachResult], cpu: np.ndarray) -> dict[str, float]:
+def summary(results: list[fw.IKResult], cpu: np.ndarray) -> dict[str, float]:
     """Success rate, wall and CPU times [ms] (CPU time: this process only, so other load on the machine does not
     count), iterations."""
     ok = np.array([r.success for r in results])
@@ -142,15 +143,15 @@ def summary(results: list[ReachResult], cpu: np.ndarray) -> dict[str, float]:
         "iterations": float(iterations.mean()),
         "iterations_median": float(np.median(iterations)),
         "iterations_ok": float(iterations[ok].mean()) if ok.any() else math.nan,
-        "unreachable": int(sum(r.reason.startswith("unreachable") for r in results)),
+        "unreachable": int(sum(r.stop_reason == "unreachable" for r in results)),
     }
 
 
-def iteration_samples(solver: MFabrik, targets: np.ndarray, starts: np.ndarray) -> dict[float, np.ndarray]:
+def iteration_samples(solve, targets: np.ndarray, starts: np.ndarray) -> dict[float, np.ndarray]:
     return {
         tol: np.array(
             [
-                solver.solve(t, x0, tolerance=tol * 1e-3, max_iterations=MAX_ITERATIONS).iterations
+                solve(t, x0, tolerance=tol * 1e-3, max_iterations=MAX_ITERATIONS).iterations
                 for t, x0 in zip(targets, starts)
             ]
         )
@@ -320,44 +321,37 @@ def main(tasks: int = TASKS) -> None:
     robot = fw.load_robot("youbot_mobile")
     arm = MobileArm.from_robot(robot)
     rng = np.random.default_rng(SEED)
-    settings = JacobianSettings()
-    mfabrik = MFabrik(arm)
+    # every solver through framework.solve, as the task files run them (M-FABRIK's restarts drawn from seed 0)
+    random_task = load_task(TASKS_DIR / "paper003_random_targets.toml")
     solvers = {
-        "pinv": pseudo_inverse_ik(robot, settings=settings),
-        "dls": damped_least_squares_ik(robot, settings=settings),
-        "m-fabrik": mfabrik,
-        "m-fabrik-orthogonal": MFabrik(arm, keep_link=False),
+        "pinv": random_task.solve_function("pinv")[0],
+        "dls": random_task.solve_function("dls")[0],
+        "m-fabrik": random_task.solve_function("mfabrik", seed=0)[0],
+        "m-fabrik-orthogonal": random_task.solve_function("mfabrik", options={"keep_link": False}, seed=0)[0],
     }
 
     print("Tables 2-3", flush=True)
     targets, starts = random_tasks(robot, rng, tasks)
     table = run_table(solvers, targets, starts)
-    samples = iteration_samples(mfabrik, targets, starts)
+    samples = iteration_samples(solvers["m-fabrik"], targets, starts)
     plot_iterations(OUT / "paper003_iterations.png", samples)
 
     print("21-point path", flush=True)
     path_task = sinusoid_task()
     path_targets, path_start = path_task.targets, path_task.start
-    path_solver = MFabrik(arm, orientation=BaseOrientation.FOLLOW_JOINT1)
     trackings = {
-        "m-fabrik": track(
-            path_solver.solve, path_targets, path_start, tolerance=1e-3, max_iterations=MAX_ITERATIONS
-        ),
-        "pinv": track(
-            solvers["pinv"].solve, path_targets, path_start, tolerance=1e-3, max_iterations=MAX_ITERATIONS
-        ),
-        "dls": track(
-            solvers["dls"].solve, path_targets, path_start, tolerance=1e-3, max_iterations=MAX_ITERATIONS
-        ),
+        name: track(path_task.solve_function(solver)[0], path_targets, path_start, tolerance=1e-3,
+                    max_iterations=MAX_ITERATIONS)
+        for name, solver in (("m-fabrik", "mfabrik"), ("pinv", "pinv"), ("dls", "dls"))
     }
     plot_sinusoid(OUT / "paper003_sinusoid.png", robot, arm, path_targets, trackings)
 
     print("obstacle scenarios", flush=True)
     scenario_rows = []
     for scenario in scenarios(robot):
-        solver = MFabrik(arm, scenario.environment, orientation=scenario.orientation)
+        solve, solver = scenario.task.solve_function("mfabrik")
         tracking = track(
-            solver.solve,
+            solve,
             scenario.targets,
             scenario.start,
             tolerance=1e-3,
@@ -390,7 +384,7 @@ def write_report(
     tasks: int,
     load: tuple[float, float],
 ) -> None:
-    s = JacobianSettings()
+    s = BUSS
     lines = [
         "# Paper 003 (M-FABRIK) reproduced on the mobile youBot",
         "",
@@ -401,7 +395,7 @@ def write_report(
         "",
         (
             f"Machine: {machine()}. Timings are per solve, set-up included, single-threaded Python: wall-clock "
-            "(`ReachResult.wall_time`) and this process's CPU time, which other load on a shared machine does not "
+            "(`IKResult.wall_time`: every solver is called through `framework.solve`) and this process's CPU time, which other load on a shared machine does not "
             f"inflate (load average {load[0]:.1f} at the start of the run, {load[1]:.1f} at its end)."
         ),
         "",

@@ -35,6 +35,7 @@ from .collision import CollisionReport, Contact, RobotShape
 from .scene import Box, Capsule, Mesh, Plane, Scene, Sphere
 from .solvers import solver_names
 from .fabrik import solver as _mfabrik_solver  # noqa: F401  registers "mfabrik" (paper 003) with the solvers
+from .baselines import solver as _jacobian_solvers  # noqa: F401  registers "pinv" and "dls" (papers 001, 003)
 
 __version__ = "0.1.0"
 

@@ -51,7 +51,8 @@ class IKResult:
             ``local_minimum``, ``interrupted``, ...).
         iterations, evaluations: solver iterations and cost / residual evaluations.
         wall_time: seconds.
-        history: best cost after each iteration (metaheuristics; per phase for the hybrid).
+        history: best cost after each iteration (metaheuristics; per phase for the hybrid); the task residual's
+            norm at each evaluation (``pinv``, ``dls``).
         solver: solver name; settings: every setting used.
         state: what a following solve of a similar problem may start from, as options of the same solver
             (e.g. CMA-ES's adapted covariance along a trajectory).

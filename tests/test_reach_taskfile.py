@@ -62,7 +62,7 @@ def test_reach_run_records_the_path(tmp_path, capsys):
     assert main(["run", "paper003_sinusoid", "--record", str(path)]) == EXIT_OK
     _, errors = read_recording(path).scalars("/tracking/paper003_sinusoid/position_error", "waypoint")
     task = load_task(TASKS / "paper003_sinusoid.toml")
-    expected = [r.position_error for r in run_reach_task(task).results]
+    expected = run_reach_task(task).position_errors
     np.testing.assert_allclose(errors, expected)
 
 

@@ -9,19 +9,42 @@ any joint). ``J⁺`` is
   (paper 001's "conventional method" inverts this way; near a singularity ``1/σ`` explodes: the jump);
 - ``"dls"``: damped least squares ``Jᵀ (J Jᵀ + λ² I)⁻¹`` (bounded steps, larger error near singularities).
 
-Steps are clipped to the search box (the robot cannot leave its limits; the methods do not know them).
+Steps are clipped to the search box (the robot cannot leave its limits; the methods do not know them). One loop,
+:func:`jacobian_ik`, runs on the task terms of any problem's :class:`~framework.costs.Program`; the solvers
+``"pinv"`` and ``"dls"`` (:mod:`~framework.baselines.solver`) put it behind :func:`framework.solve`.
 """
 
 from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
 from ..costs import Position, Program
 from ..engine import residuals
 from ..errors import TaskError
-from ..robot import Robot
+from ..robot import JointKind, Robot
 
 METHODS = ("pinv", "dls")
+
+
+class JacobianRun(NamedTuple):
+    """What :func:`jacobian_ik` returns.
+
+    Attributes:
+        x: the last configuration ``(n,)``; stop: ``"tolerance"``, ``"max_iterations"``, ``"time_budget"`` or
+            ``"callback"``; steps: Jacobian steps taken; evaluations: residual and Jacobian evaluations
+            (``steps + 1``: the last one found the task within tolerance or ended the run); history: ``‖e‖`` at
+            each evaluation ``(evaluations,)``.
+    """
+
+    x: np.ndarray
+    stop: str
+    steps: int
+    evaluations: int
+    history: np.ndarray
 
 
 def svd_pinv(J: np.ndarray, rcond: float = 1e-6) -> np.ndarray:
@@ -56,32 +79,72 @@ def position_and_jacobian(robot: Robot, x: np.ndarray, frame: str) -> tuple[np.n
     return residuals(program, x)
 
 
-def jacobian_ik(
-    robot: Robot,
-    frame: str,
-    target: np.ndarray,
-    x0: np.ndarray,
-    *,
-    method: str = "pinv",
-    gain: float = 1.0,
-    max_iterations: int = 100,
-    tolerance: float = 1e-6,
-    rcond: float = 1e-6,
-    damping: float = 0.05,
-) -> tuple[np.ndarray, float, int]:
-    """Iterate ``x ← clip(x + gain J⁺ (t − p(x)))`` from ``x0`` until ``‖t − p‖ < tolerance`` [m].
+def full_turns(program: Program) -> np.ndarray:
+    """``(n,)`` True for the angles the baselines wrap: those the engine wraps (continuous joints, a planar
+    base's heading) and revolute joints whose limits span a full turn (``youbot_mobile``'s ``base_theta``, ±π:
+    paper 003's baselines turn the base through ±π)."""
+    robot = program.robot
+    full = robot.upper - robot.lower >= 2 * np.pi - 1e-9
+    revolute = np.zeros(robot.n, dtype=bool)
+    for joint in robot.joints:
+        if joint.kind is JointKind.REVOLUTE:
+            revolute[joint.index] = True
+    return program.layout.box_wrap | (revolute & full)
 
-    Returns ``(x (n,), final error [m], Jacobian evaluations)``.
+
+def jacobian_ik(
+    program: Program,
+    x0: np.ndarray,
+    inverse_of: Callable[[np.ndarray], np.ndarray],
+    *,
+    gain: float = 1.0,
+    max_step: float | None = None,
+    max_error: float | None = None,
+    tolerance: float = 1e-6,
+    angle_tolerance: float | None = None,
+    max_iterations: int = 100,
+    deadline: float | None = None,
+    callback: Callable[[int, float, np.ndarray], bool | None] | None = None,
+) -> JacobianRun:
+    """Closed-loop IK on the task terms of ``program``: ``x ← box(x + gain J⁺ e)`` from ``x0`` ``(n,)``.
+
+    ``e = −r`` is the stacked task residual (``t − p(x)`` for a position [m]), ``J`` its Jacobian ``(m, n)`` in
+    joint coordinates (the compiled kernels: planar bases and continuous joints included), ``J⁺ =
+    inverse_of(J)``. Optionally, as in Buss's code, ``e`` is clamped to the length ``max_error`` and the step
+    scaled so that no coordinate moves more than ``max_step`` [rad or m]. ``box`` wraps the angles whose range
+    is a full turn (:func:`full_turns`) and clips the others to the limits (the methods do not know them). Stops when every
+    task block is within ``tolerance`` [m] / ``angle_tolerance`` [rad], after ``max_iterations`` steps, at
+    ``deadline`` (``time.monotonic()``) or when ``callback(step, ‖e‖, x)`` returns True.
     """
+    lower, upper, wrap = program.robot.lower, program.robot.upper, full_turns(program)
+    angle_tolerance = tolerance if angle_tolerance is None else angle_tolerance
+    ends = np.cumsum(program.task_block_rows)
     x = np.array(x0, dtype=float)
-    target = np.asarray(target, dtype=float)
-    evaluations = 0
-    for _ in range(max_iterations):
-        p, J = position_and_jacobian(robot, x, frame)
-        evaluations += 1
-        e = target - p
-        if np.linalg.norm(e) < tolerance:
-            return x, float(np.linalg.norm(e)), evaluations
-        x = np.clip(x + gain * inverse(J, method, rcond=rcond, damping=damping) @ e, robot.lower, robot.upper)
-    p, _ = position_and_jacobian(robot, x, frame)
-    return x, float(np.linalg.norm(target - p)), evaluations + 1
+    history: list[float] = []
+    steps, stop = 0, "max_iterations"
+    while True:
+        r, J = residuals(program, x)
+        history.append(float(np.linalg.norm(r)))
+        squares = np.concatenate(([0.0], np.cumsum(r * r)))
+        blocks = np.sqrt(squares[ends] - squares[ends - program.task_block_rows])
+        if program.within(blocks, tolerance, angle_tolerance):
+            stop = "tolerance"
+            break
+        if steps >= max_iterations:
+            break
+        if deadline is not None and time.monotonic() >= deadline:
+            stop = "time_budget"
+            break
+        e = -r
+        if max_error is not None and history[-1] > max_error:
+            e *= max_error / history[-1]
+        dx = gain * (inverse_of(J) @ e)
+        biggest = float(np.abs(dx).max())
+        if max_step is not None and biggest > max_step:
+            dx *= max_step / biggest
+        x = np.where(wrap, lower + np.mod(x + dx - lower, 2 * np.pi), np.clip(x + dx, lower, upper))
+        steps += 1
+        if callback is not None and callback(steps, history[-1], x.copy()):
+            stop = "callback"
+            break
+    return JacobianRun(x, stop, steps, len(history), np.array(history))

@@ -15,11 +15,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..costs import Position, Program
 from ..errors import TaskError
 from ..robot import Robot
 from ..tracking import TrackingResult
 from ..trajectory import Trajectory
-from .jacobian import METHODS, jacobian_ik
+from .jacobian import METHODS, inverse, jacobian_ik
 from .relative import RELATIVE_GAIN, SECONDARY_GAIN, relative_jacobian_ik
 
 #: A waypoint counts as reached when its position error is at most this [m] (the papers' tolerance).
@@ -54,21 +55,15 @@ def jacobian_track(
     robot.frame_id(frame)
     x = _initial(robot, initial)
     q0, rows = x.copy(), []
+    term = Position(frame, trajectory.positions[0])
+    program = Program(robot, 1.0 * term)  # one program, its target moved to each waypoint
     for k in range(trajectory.K):
         start = time.perf_counter()
-        x, _, evaluations = jacobian_ik(
-            robot,
-            frame,
-            trajectory.positions[k],
-            x,
-            method=method,
-            gain=gain,
-            max_iterations=iterations_per_point,
-            tolerance=tolerance,
-            rcond=rcond,
-            damping=damping,
-        )
-        rows.append((x.copy(), evaluations, time.perf_counter() - start))
+        term.set_target(trajectory.positions[k])
+        run = jacobian_ik(program, x, lambda J: inverse(J, method, rcond=rcond, damping=damping), gain=gain,
+                          max_iterations=iterations_per_point, tolerance=tolerance)
+        x = run.x
+        rows.append((x.copy(), run.evaluations, time.perf_counter() - start))
     settings = {
         "method": method,
         "frame": frame,

@@ -105,7 +105,7 @@ def _run_reach(args, console: Console, task) -> int:
     with Progress(console=console, transient=True, disable=args.no_progress) as bar:
         job = bar.add_task("solving", total=task.random or None)
         run = run_reach_task(task, solver=solver, progress=lambda k, total: bar.update(job, completed=k))
-    errors = np.array([r.position_error for r in run.results])
+    errors = run.position_errors
     iterations = np.array([r.iterations for r in run.results])
     times = np.array([r.wall_time for r in run.results]) * 1e3
     table = Table(title=f"{task.name}: {solver}")
@@ -116,7 +116,7 @@ def _run_reach(args, console: Console, task) -> int:
         ("position error, mean / max [m]", f"{errors.mean():.2e} / {errors.max():.2e}"),
         ("iterations, mean / max / total", f"{iterations.mean():.2f} / {iterations.max()} / {iterations.sum()}"),
         ("time per solve, mean / max [ms]", f"{times.mean():.3f} / {times.max():.3f}"),
-        ("unreachable", str(sum(r.reason.startswith("unreachable") for r in run.results))),
+        ("unreachable", str(sum(r.stop_reason == "unreachable" for r in run.results))),
     ]
     if task.environment is not None:
         bases = run.base_positions

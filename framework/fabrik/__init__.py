@@ -3,15 +3,16 @@
 Layout, in the order data flows: :mod:`~.chain` (which chains, their plane geometry) → :mod:`~.reach` (where the
 arm reaches) → :mod:`~.passes` (forward / backward reaching) → :mod:`~.fabrik` (fixed base) → :mod:`~.mobile`,
 :mod:`~.environment`, :mod:`~.regions` (base, obstacles, admissible area) → :mod:`~.mfabrik` (Algorithm 1) →
-:mod:`~.steps` (Algorithm 2) → :mod:`~.tracking` (paths); :mod:`~.jacobian` holds the pseudo-inverse and damped
-least-squares baselines. Every solver returns a :class:`ReachResult`.
+:mod:`~.steps` (Algorithm 2) → :mod:`~.tracking` (paths); :mod:`~.solver` registers the solver ``mfabrik`` behind
+:func:`framework.solve`. FABRIK and M-FABRIK return their own :class:`ReachResult` (with the base's path), which
+``mfabrik`` turns into the common result; the Jacobian baselines of paper 003 are the solvers ``pinv`` and ``dls``
+(:mod:`framework.baselines`).
 """
 
 from .chain import PlanarChain
 from .environment import Circle, Environment, Polygon, Rectangle
 from .errors import UnsupportedBaseError, UnsupportedChainError
 from .fabrik import Fabrik
-from .jacobian import JacobianIK, JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
 from .mfabrik import MFabrik
 from .mobile import BaseOrientation, MobileArm
 from .reach import ReachTable
@@ -26,8 +27,6 @@ __all__ = [
     "Circle",
     "Environment",
     "Fabrik",
-    "JacobianIK",
-    "JacobianSettings",
     "MFabrik",
     "MobileArm",
     "PlanarChain",
@@ -39,9 +38,7 @@ __all__ = [
     "Tracking",
     "UnsupportedBaseError",
     "UnsupportedChainError",
-    "damped_least_squares_ik",
     "intermediate_configurations",
-    "pseudo_inverse_ik",
     "shortest_free_path",
     "track",
 ]

@@ -14,6 +14,7 @@ of a frame are built once per robot.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -37,16 +38,24 @@ class MFabrikOptions:
         orientation: how M-FABRIK turns the base: ``"follow_joint1"`` (paper 003's path experiment),
             ``"face_target"`` or ``"fixed"`` (:class:`~framework.fabrik.BaseOrientation`).
         base_margin: distance [m] the base's reference point keeps from the obstacles' shadows (paper 003: 0.2).
+        environment: floor obstacles of M-FABRIK's own (circles, rectangles, polygons in the floor plane, with
+            their margin and navigable box: an :class:`~framework.fabrik.Environment`, as reach task files give
+            them), beside an Obstacles term's shadows (its margin then replaces ``base_margin``), or ``None``.
         window: iterations without progress before a restart (``None``: the method's own, 4 for M-FABRIK, 10 for
             FABRIK); restarts: restarts from new arm shapes.
+        keep_link: M-FABRIK's forward reaching keeps the first joint at its fixed height (True) or leaves it
+            where the line puts it, as the paper's orthogonal ProjectPoint (False; :class:`MFabrik`).
     """
 
     orientation: str = "follow_joint1"
     base_margin: float = 0.2
     window: int | None = None
     restarts: int = 10
+    environment: Any = None
+    keep_link: bool = True
 
     def __post_init__(self) -> None:
+        from .environment import Environment
         from .mobile import BaseOrientation
 
         known = [o.value for o in BaseOrientation]
@@ -54,6 +63,11 @@ class MFabrikOptions:
             raise SolverError(f"mfabrik orientation must be one of {known}; got {self.orientation!r}")
         if not (isinstance(self.base_margin, (int, float)) and 0 <= self.base_margin < np.inf):
             raise SolverError(f"mfabrik base_margin must be a distance >= 0 [m]; got {self.base_margin!r}")
+        if not isinstance(self.keep_link, bool):
+            raise SolverError(f"mfabrik keep_link must be True or False; got {self.keep_link!r}")
+        if self.environment is not None and not isinstance(self.environment, Environment):
+            raise SolverError(f"mfabrik environment must be a framework.fabrik.Environment or None; "
+                              f"got {type(self.environment).__name__}")
         for name in ("window", "restarts"):
             value = getattr(self, name)
             if value is None and name == "window":
@@ -92,7 +106,10 @@ class MFabrikSolver(IKSolver):
         result = planner.solve(position.target, x0, tolerance=request.tolerance,
                                max_iterations=request.max_iterations or DEFAULT_ITERATIONS)
         stop = _STOP.get(result.reason, "unreachable")
+        environment = planner.environment if method == "m-fabrik" else None
         settings = {**self.options.__dict__, "method": method, "start": start, "reason": result.reason,
+                    "environment": None if environment is None else
+                    f"{len(environment.obstacles)} floor obstacles, margin {environment.margin:g} m",
                     "max_iterations": request.max_iterations or DEFAULT_ITERATIONS}
         return Outcome(result.configuration, stop, result.iterations, result.iterations,
                        history=None, settings=settings, state={"base_path": result.base_path})
@@ -110,10 +127,14 @@ class MFabrikSolver(IKSolver):
         window = {} if o.window is None else {"window": o.window}
         if "base" in robot.groups and robot.group("base").size == 3:
             arm = robot.memo(("mfabrik arm", frame), lambda: MobileArm.from_robot(robot, frame))
-            environment = None if obstacles is None else Environment.from_scene(obstacles.scene, margin=o.base_margin)
+            environment = o.environment
+            if obstacles is not None:
+                given = environment or Environment(margin=o.base_margin)
+                environment = Environment.from_scene(obstacles.scene, margin=given.margin, bounds=given.bounds,
+                                                     obstacles=given.obstacles)
             return "m-fabrik", MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, seed=seed,
-                                       **window)
-        if obstacles is not None:
+                                       keep_link=o.keep_link, **window)
+        if obstacles is not None or o.environment is not None:
             raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
                               "for a mobile base only")
         chain = robot.memo(("fabrik chain", frame), lambda: PlanarChain.from_robot(robot, frame))

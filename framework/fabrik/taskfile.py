@@ -49,10 +49,12 @@ from ..robot import Robot
 from ..scene import Scene
 from ..taskfile import trajectory_from_table, evaluate
 from .environment import Circle, Environment, Polygon, Rectangle
-from .jacobian import JacobianSettings, damped_least_squares_ik, pseudo_inverse_ik
+from ..baselines.solver import BUSS
+from ..costs import Position
+from ..problem import Problem
+from ..solve import IKResult, solve
 from .mfabrik import MFabrik
 from .mobile import BaseOrientation, MobileArm
-from .result import ReachResult
 from .tracking import Tracking, track
 
 #: Solvers of reach tasks.
@@ -97,18 +99,33 @@ class ReachTask:
     def is_path(self) -> bool:
         return self.targets is not None
 
-    def solve_function(self, name: str | None = None) -> tuple[Callable[..., ReachResult], MFabrik | None]:
-        """``solve(target, x0, tolerance=, max_iterations=)`` of the chosen solver, and the M-FABRIK planner for
-        Algorithm 2 (None for the Jacobian baselines, which do not plan around obstacles)."""
+    def solve_function(self, name: str | None = None, *, options: Mapping[str, Any] | None = None,
+                       seed: int | None = None) -> tuple[Callable[..., IKResult], MFabrik | None]:
+        """``solve(target, x0, tolerance=, max_iterations=)``: the chosen solver through :func:`framework.solve` on
+        one reach problem (a :class:`~framework.costs.Position` term named ``"position"``, its target moved to each
+        call), and the M-FABRIK planner for Algorithm 2 (None for the Jacobian baselines, which do not plan around
+        obstacles). ``options`` are added to the solver's (the baselines: :data:`~framework.baselines.solver.BUSS`;
+        ``mfabrik``: the task's base orientation and environment); ``seed`` replaces the task's."""
         name = name or self.solver["name"]
+        if name not in REACH_SOLVERS:
+            raise TaskError(f"unknown reach solver {name!r}; reach tasks are solved by {list(REACH_SOLVERS)}")
+        term = Position(self.frame, np.zeros(3), name="position")
+        problem = Problem(self.robot, 1.0 * term)
+        seed = self.solver["seed"] if seed is None else seed
+        chosen: dict[str, Any] = dict(BUSS.__dict__)
+        planner = None
         if name == "mfabrik":
-            solver = MFabrik(MobileArm.from_robot(self.robot, self.frame), self.environment,
-                             orientation=self.orientation, seed=self.solver["seed"])
-            return solver.solve, solver
-        if name in ("pinv", "dls"):
-            make = pseudo_inverse_ik if name == "pinv" else damped_least_squares_ik
-            return make(self.robot, frame=self.frame, settings=JacobianSettings()).solve, None
-        raise TaskError(f"unknown reach solver {name!r}; reach tasks are solved by {list(REACH_SOLVERS)}")
+            chosen = {"orientation": self.orientation.value, "environment": self.environment}
+            planner = MFabrik(MobileArm.from_robot(self.robot, self.frame), self.environment,
+                              orientation=self.orientation, seed=seed)
+        chosen.update(options or {})
+
+        def call(target: np.ndarray, x0: np.ndarray, *, tolerance: float, max_iterations: int) -> IKResult:
+            term.set_target(target)
+            return solve(problem, name, initial=x0, tolerance=tolerance, max_iterations=max_iterations,
+                         options=chosen, seed=seed)
+
+        return call, planner
 
     def random_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """``(targets (k, 3) [m], starts (k, n))``: FK of random configurations, and random starts (seeded)."""
@@ -120,12 +137,18 @@ class ReachTask:
 
 @dataclass(frozen=True)
 class ReachRun:
-    """What :func:`run_reach_task` returns: one result per target, and the path's Algorithm 2 steps."""
+    """What :func:`run_reach_task` returns: one :class:`~framework.solve.IKResult` per target, and the path's
+    Algorithm 2 steps."""
 
     task: ReachTask
     solver: str
-    results: tuple[ReachResult, ...]
+    results: tuple[IKResult, ...]
     tracking: Tracking | None = None
+
+    @property
+    def position_errors(self) -> np.ndarray:
+        """``(k,)`` [m] each target's position error."""
+        return np.array([r.errors["position"] for r in self.results])
 
     @property
     def success_rate(self) -> float:

@@ -8,15 +8,17 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from .mfabrik import MFabrik
-from .result import ReachResult
 from .steps import Steps, intermediate_configurations
 
-#: ``solve(target, x0, tolerance=..., max_iterations=...) -> ReachResult``, e.g. ``MFabrik(...).solve``.
-Solve = Callable[..., ReachResult]
+#: ``solve(target, x0, tolerance=..., max_iterations=...)``, e.g. ``MFabrik(...).solve`` (a :class:`ReachResult`) or
+#: a call of :func:`framework.solve` (an :class:`~framework.solve.IKResult`): a result with ``configuration``,
+#: ``iterations``, ``wall_time`` and ``success``.
+Solve = Callable[..., Any]
 
 
 @dataclass(frozen=True)
@@ -24,11 +26,11 @@ class Tracking:
     """The outcome of following a path.
 
     Attributes:
-        results: one :class:`ReachResult` per set-point.
+        results: one result per set-point (:class:`ReachResult` or :class:`~framework.solve.IKResult`).
         steps: per set-point, Algorithm 2's intermediate configurations before it (None without a step).
     """
 
-    results: tuple[ReachResult, ...]
+    results: tuple[Any, ...]
     steps: tuple[Steps | None, ...] = field(repr=False)
 
     @property
