@@ -31,6 +31,7 @@ import numpy as np
 from .errors import TaskError
 from .loading import load_robot
 from .robot import Robot
+from .task_values import evaluate
 
 PLACEMENT_KEYS = {"radius", "step", "headings", "group", "seed", "targets"}
 
@@ -53,8 +54,6 @@ def is_placement_task(raw: Mapping[str, Any]) -> bool:
 
 def placement_task_from_dict(raw: Mapping[str, Any], path: Path) -> PlacementTask:
     """Parse a base-placement task; errors name the entry at fault."""
-    from .taskfile import evaluate
-
     task, table = raw.get("task"), raw.get("placement")
     if not isinstance(task, dict) or "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")

@@ -47,7 +47,7 @@ from ..errors import TaskError
 from ..loading import load_robot
 from ..robot import Robot
 from ..scene import Scene
-from ..taskfile import trajectory_from_table, evaluate
+from ..task_values import evaluate, trajectory_from_table
 from .environment import Circle, Environment, Polygon, Rectangle
 from ..baselines.solver import BUSS
 from ..costs import Position
