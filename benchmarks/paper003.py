@@ -39,7 +39,7 @@ from framework.fabrik import (
     MFabrik,
     MobileArm,
 )
-from framework.fabrik.tracking import Tracking, track
+from framework.fabrik.taskfile import ReachRun, run_reach_task
 from framework.taskfile import load_task
 
 OUT = Path(__file__).resolve().parents[1] / "docs" / "results"
@@ -182,7 +182,7 @@ def top_view(
         ax.plot([x[0], cx, e[0]], [x[1], cy, e[1]], color=color, lw=0.6, alpha=0.6)
 
 
-def plot_sinusoid(path: Path, robot, arm, targets, trackings: dict[str, Tracking]) -> None:
+def plot_sinusoid(path: Path, robot, arm, targets, trackings: dict[str, ReachRun]) -> None:
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.6))
     colors = {"m-fabrik": "tab:green", "pinv": "tab:red", "dls": "tab:blue"}
     width = 0.27
@@ -206,13 +206,13 @@ def plot_sinusoid(path: Path, robot, arm, targets, trackings: dict[str, Tracking
     plt.close(fig)
 
 
-def plot_scenario(path: Path, robot, arm, scenario: Scenario, solver: MFabrik, tracking: Tracking) -> None:
+def plot_scenario(path: Path, robot, arm, scenario: Scenario, solver: MFabrik, tracking: ReachRun) -> None:
     env = scenario.environment
     fig, ax = plt.subplots(figsize=(7, 7))
     (x0, x1), (y0, y1) = env.bounds
     ax.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="tab:blue", lw=1.5))
     middle = len(scenario.targets) // 2
-    previous = tracking.results[middle - 1].configuration
+    previous = tracking.configurations[middle - 1]
     area = solver.admissible_area(scenario.targets[middle], previous)
     if area is not None and not area.is_empty:
         shapely.plotting.plot_polygon(area.geometry(), ax=ax, add_points=False, color="tab:green", alpha=0.3)
@@ -324,10 +324,10 @@ def main(tasks: int = TASKS) -> None:
     # every solver through framework.solve, as the task files run them (M-FABRIK's restarts drawn from seed 0)
     random_task = load_task(TASKS_DIR / "paper003_random_targets.toml")
     solvers = {
-        "pinv": random_task.solve_function("pinv")[0],
-        "dls": random_task.solve_function("dls")[0],
-        "m-fabrik": random_task.solve_function("mfabrik", seed=0)[0],
-        "m-fabrik-orthogonal": random_task.solve_function("mfabrik", options={"keep_link": False}, seed=0)[0],
+        "pinv": random_task.solve_function("pinv"),
+        "dls": random_task.solve_function("dls"),
+        "m-fabrik": random_task.solve_function("mfabrik", seed=0),
+        "m-fabrik-orthogonal": random_task.solve_function("mfabrik", options={"keep_link": False}, seed=0),
     }
 
     print("Tables 2-3", flush=True)
@@ -338,27 +338,16 @@ def main(tasks: int = TASKS) -> None:
 
     print("21-point path", flush=True)
     path_task = sinusoid_task()
-    path_targets, path_start = path_task.targets, path_task.start
-    trackings = {
-        name: track(path_task.solve_function(solver)[0], path_targets, path_start, tolerance=1e-3,
-                    max_iterations=MAX_ITERATIONS)
-        for name, solver in (("m-fabrik", "mfabrik"), ("pinv", "pinv"), ("dls", "dls"))
-    }
+    path_targets = path_task.targets
+    trackings = {name: run_reach_task(path_task, solver=solver)
+                 for name, solver in (("m-fabrik", "mfabrik"), ("pinv", "pinv"), ("dls", "dls"))}
     plot_sinusoid(OUT / "paper003_sinusoid.png", robot, arm, path_targets, trackings)
 
     print("obstacle scenarios", flush=True)
     scenario_rows = []
     for scenario in scenarios(robot):
-        solve, solver = scenario.task.solve_function("mfabrik")
-        tracking = track(
-            solve,
-            scenario.targets,
-            scenario.start,
-            tolerance=1e-3,
-            max_iterations=MAX_ITERATIONS,
-            step=STEP,
-            planner=solver,
-        )
+        tracking = run_reach_task(scenario.task)
+        solver = scenario.task.planner()
         plot_scenario(OUT / f"paper003_{scenario.name}.png", robot, arm, scenario, solver, tracking)
         bases = np.vstack([s.bases for s in tracking.steps if s is not None])
         finals = tracking.configurations[:, :2]

@@ -15,7 +15,9 @@ from hypothesis import strategies as st
 import framework as fw
 from framework.fabrik import Circle, Environment, MFabrik, MobileArm, Polygon, Rectangle
 from framework.fabrik.steps import intermediate_configurations, shortest_free_path
-from framework.fabrik.tracking import track
+from framework.fabrik.steps import algorithm2
+from framework.tracking import TrackingTask, track
+from framework.trajectory import Trajectory
 
 BOX = ((-1.5, 1.5), (-1.5, 1.5))
 
@@ -124,9 +126,13 @@ def test_tracking_a_path_past_an_obstacle(robot, arm):
     ys = np.linspace(-1.0, 1.0, 21)
     targets = np.column_stack([0.1 * np.sin(2 * np.pi * ys), ys, np.full_like(ys, 0.3)])
     x0 = configuration_at(robot, (-0.2, -1.3))
-    tracking = track(solver.solve, targets, x0, tolerance=1e-3, step=0.1, planner=solver)
-    assert tracking.success
-    assert np.all([r.position_error <= 1e-3 for r in tracking.results])
-    for steps in tracking.steps:
+    tracking = track(robot, Trajectory.from_array(targets), TrackingTask(frame="arm_ee", motion={}), solver="mfabrik",
+                     initial=x0, tolerance=1e-3, iterations_per_point=1000, options={"environment": env},
+                     progress=False)
+    assert tracking.success.all()
+    reached = robot.frame_poses(tracking.configurations, "arm_ee").positions[:, 0]  # Pinocchio FK
+    assert np.linalg.norm(reached - targets, axis=1).max() <= 1e-3
+    for steps in algorithm2(solver, x0, tracking.configurations, targets, 0.1):
+        assert steps.success
         assert_free_steps(env, steps.bases, 0.1)
     assert tracking.iterations.sum() < 21 * 10

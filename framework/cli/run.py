@@ -106,8 +106,7 @@ def _run_reach(args, console: Console, task) -> int:
         job = bar.add_task("solving", total=task.random or None)
         run = run_reach_task(task, solver=solver, progress=lambda k, total: bar.update(job, completed=k))
     errors = run.position_errors
-    iterations = np.array([r.iterations for r in run.results])
-    times = np.array([r.wall_time for r in run.results]) * 1e3
+    iterations, times = run.iterations, run.wall_times * 1e3
     table = Table(title=f"{task.name}: {solver}")
     table.add_column("")
     table.add_column("value", justify="right")
@@ -124,8 +123,8 @@ def _run_reach(args, console: Console, task) -> int:
         inside = sum(task.environment.in_rejection(*p) for p in bases)
         rows += [("base positions in the rejection area", f"{inside} of {len(bases)}"),
                  ("least base clearance to an obstacle [m]", f"{clearance:.3f} (margin {task.environment.margin:g})")]
-    if run.tracking is not None and task.step is not None and solver == "mfabrik":
-        steps = [s for s in run.tracking.steps if s is not None]
+    if run.steps is not None:
+        steps = run.steps
         gaps = [s.longest_step for s in steps]
         rows += [("Algorithm 2: intermediate configurations", str(sum(len(s.configurations) for s in steps))),
                  ("Algorithm 2: largest base step [m]", f"{max(gaps, default=0.0):.3f} (ρ = {task.step:g})")]
@@ -134,12 +133,11 @@ def _run_reach(args, console: Console, task) -> int:
     console.print(table)
     if args.record is not None:
         with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
-            targets = task.targets if task.is_path else task.random_pairs()[0]
-            recorder.log_path(np.array([r.configuration for r in run.results]), desired={task.frame: targets},
+            recorder.log_path(run.configurations, desired={task.frame: run.targets},
                               errors={"position_error": errors, "iterations": iterations.astype(float)},
                               name=task.name, settings={"solver": solver, **task.solver})
         _recorded(args, console)
-    ok = all(r.success for r in run.results) and (run.tracking is None or run.tracking.success)
+    ok = run.success
     return EXIT_OK if ok else EXIT_MISSED
 
 

@@ -78,6 +78,18 @@ def intermediate_configurations(
     return Steps(np.array(configurations).reshape(-1, n), np.array(bases), True, reason)
 
 
+def algorithm2(planner: MFabrik, initial: np.ndarray, configurations: np.ndarray, targets: np.ndarray,
+               step: float) -> tuple[Steps, ...]:
+    """Algorithm 2 along a tracked path: before each set-point, the steps from the previous solution (``initial``
+    ``(n,)`` before the first) to its solution ``configurations[k]`` ``(m, n)``, the arm reaching for
+    ``targets[k]`` ``(m, 3)`` [m], the base moving at most ``step`` [m] at a time."""
+    out, previous = [], np.asarray(initial, dtype=float)
+    for x, target in zip(np.asarray(configurations, dtype=float), np.asarray(targets, dtype=float)):
+        out.append(intermediate_configurations(planner, previous, x, target, step))
+        previous = x
+    return tuple(out)
+
+
 def shortest_free_path(environment: Environment, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     """Shortest polyline ``(m, 2)`` [m] from ``a`` to ``b`` that stays in the box and out of the rejection area,
     through corners of the dilated obstacles; None if ``a`` or ``b`` is in the rejection area or none exists."""

@@ -53,9 +53,11 @@ from ..baselines.solver import BUSS
 from ..costs import Position
 from ..problem import Problem
 from ..solve import IKResult, solve
+from ..tracking import TrackingResult, TrackingTask, track
+from ..trajectory import Trajectory
 from .mfabrik import MFabrik
 from .mobile import BaseOrientation, MobileArm
-from .tracking import Tracking, track
+from .steps import Steps, algorithm2
 
 #: Solvers of reach tasks.
 REACH_SOLVERS = ("mfabrik", "pinv", "dls")
@@ -99,33 +101,37 @@ class ReachTask:
     def is_path(self) -> bool:
         return self.targets is not None
 
-    def solve_function(self, name: str | None = None, *, options: Mapping[str, Any] | None = None,
-                       seed: int | None = None) -> tuple[Callable[..., IKResult], MFabrik | None]:
-        """``solve(target, x0, tolerance=, max_iterations=)``: the chosen solver through :func:`framework.solve` on
-        one reach problem (a :class:`~framework.costs.Position` term named ``"position"``, its target moved to each
-        call), and the M-FABRIK planner for Algorithm 2 (None for the Jacobian baselines, which do not plan around
-        obstacles). ``options`` are added to the solver's (the baselines: :data:`~framework.baselines.solver.BUSS`;
-        ``mfabrik``: the task's base orientation and environment); ``seed`` replaces the task's."""
-        name = name or self.solver["name"]
+    def solver_options(self, name: str, options: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """The options of reach solver ``name``: the baselines' :data:`~framework.baselines.solver.BUSS`, M-FABRIK's
+        base orientation and environment from the task; ``options`` added."""
         if name not in REACH_SOLVERS:
             raise TaskError(f"unknown reach solver {name!r}; reach tasks are solved by {list(REACH_SOLVERS)}")
-        term = Position(self.frame, np.zeros(3), name="position")
+        chosen = dict(BUSS.__dict__) if name != "mfabrik" else {"orientation": self.orientation.value,
+                                                                 "environment": self.environment}
+        return {**chosen, **(options or {})}
+
+    def planner(self, seed: int | None = None) -> MFabrik:
+        """The M-FABRIK planner of Algorithm 2's steps (the task's environment and base orientation)."""
+        return MFabrik(MobileArm.from_robot(self.robot, self.frame), self.environment, orientation=self.orientation,
+                       seed=self.solver["seed"] if seed is None else seed)
+
+    def solve_function(self, name: str | None = None, *, options: Mapping[str, Any] | None = None,
+                       seed: int | None = None) -> Callable[..., IKResult]:
+        """``solve(target, x0, tolerance=, max_iterations=)``: the chosen solver through :func:`framework.solve` on
+        one reach problem (a :class:`~framework.costs.Position` term, its target moved to each call), with
+        :meth:`solver_options`; ``seed`` replaces the task's."""
+        name = name or self.solver["name"]
+        chosen = self.solver_options(name, options)
+        term = Position(self.frame, np.zeros(3))
         problem = Problem(self.robot, 1.0 * term)
         seed = self.solver["seed"] if seed is None else seed
-        chosen: dict[str, Any] = dict(BUSS.__dict__)
-        planner = None
-        if name == "mfabrik":
-            chosen = {"orientation": self.orientation.value, "environment": self.environment}
-            planner = MFabrik(MobileArm.from_robot(self.robot, self.frame), self.environment,
-                              orientation=self.orientation, seed=seed)
-        chosen.update(options or {})
 
         def call(target: np.ndarray, x0: np.ndarray, *, tolerance: float, max_iterations: int) -> IKResult:
             term.set_target(target)
             return solve(problem, name, initial=x0, tolerance=tolerance, max_iterations=max_iterations,
                          options=chosen, seed=seed)
 
-        return call, planner
+        return call
 
     def random_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         """``(targets (k, 3) [m], starts (k, n))``: FK of random configurations, and random starts (seeded)."""
@@ -137,29 +143,54 @@ class ReachTask:
 
 @dataclass(frozen=True)
 class ReachRun:
-    """What :func:`run_reach_task` returns: one :class:`~framework.solve.IKResult` per target, and the path's
-    Algorithm 2 steps."""
+    """What :func:`run_reach_task` returns.
+
+    Attributes:
+        task, solver: what ran.
+        targets: ``(k, 3)`` [m] the targets, in order.
+        results: one :class:`~framework.solve.IKResult` per target.
+        path: a path's :class:`~framework.tracking.TrackingResult` (``tracking.track``), or None.
+        steps: Algorithm 2's steps before each set-point of a path (M-FABRIK with a step ``ρ``), or None.
+    """
 
     task: ReachTask
     solver: str
+    targets: np.ndarray
     results: tuple[IKResult, ...]
-    tracking: Tracking | None = None
+    path: TrackingResult | None = None
+    steps: tuple[Steps, ...] | None = None
+
+    @property
+    def configurations(self) -> np.ndarray:
+        """``(k, n)`` the configuration reached for each target."""
+        return np.array([r.configuration for r in self.results]).reshape(-1, self.task.robot.n)
+
+    @property
+    def iterations(self) -> np.ndarray:
+        """``(k,)`` each solve's iterations."""
+        return np.array([r.iterations for r in self.results], dtype=int)
+
+    @property
+    def wall_times(self) -> np.ndarray:
+        """``(k,)`` [s] each solve's wall-clock time."""
+        return np.array([r.wall_time for r in self.results])
 
     @property
     def position_errors(self) -> np.ndarray:
-        """``(k,)`` [m] each target's position error."""
-        return np.array([r.errors["position"] for r in self.results])
+        """``(k,)`` [m] each target's position error, by Pinocchio's forward kinematics."""
+        reached = self.task.robot.frame_poses(self.configurations, self.task.frame).positions[:, 0]
+        return np.linalg.norm(reached - self.targets[: len(reached)], axis=1)
 
     @property
-    def success_rate(self) -> float:
-        return float(np.mean([r.success for r in self.results])) if self.results else float("nan")
+    def success(self) -> bool:
+        """Every target reached and every base transition planned."""
+        return all(r.success for r in self.results) and all(s.success for s in self.steps or ())
 
     @property
     def base_positions(self) -> np.ndarray:
         """``(k, 2)`` [m] every base position the run visits: each solution and every intermediate configuration."""
         points = [r.configuration[list(self.task.robot.groups["base"][:2])] for r in self.results]
-        if self.tracking is not None:
-            points += [b[:2] for s in self.tracking.steps if s is not None for b in s.bases]
+        points += [b[:2] for s in self.steps or () for b in s.bases]
         return np.array(points).reshape(-1, 2)
 
 
@@ -219,23 +250,37 @@ def reach_task_from_dict(raw: Mapping[str, Any], path: Path, *, points: int | No
 
 def run_reach_task(task: ReachTask, *, solver: str | None = None, progress: Callable[[int, int], None] | None = None,
                    ) -> ReachRun:
-    """Solve every target of ``task`` (random pairs, or the path warm-started point to point with Algorithm 2)."""
+    """Solve every target of ``task``: random pairs one :func:`framework.solve` each, a path by
+    :func:`framework.tracking.track` (each set-point from the previous solution) and, for M-FABRIK with a step
+    ``ρ``, Algorithm 2's steps between consecutive solutions."""
     name = solver or task.solver["name"]
-    solve, planner = task.solve_function(name)
     tolerance, cap = float(task.solver["tolerance"]), int(task.solver["max_iterations"])
     if task.is_path:
-        tracking = track(solve, task.targets, task.start, tolerance=tolerance, max_iterations=cap,
-                         step=task.step if planner is not None else None, planner=planner)
-        return ReachRun(task, name, tracking.results, tracking)
+        results: list[IKResult] = []
+
+        def keep(k: int, result: IKResult) -> None:
+            results.append(result)
+            if progress is not None:
+                progress(k + 1, len(task.targets))
+
+        path = track(task.robot, Trajectory.from_array(task.targets, task.name),
+                     TrackingTask(frame=task.frame, motion={}), solver=name, seed=task.solver["seed"],
+                     iterations_per_point=cap, initial=task.start, tolerance=tolerance, predict=False,
+                     options=task.solver_options(name), progress=False, callback=keep)
+        steps = None
+        if name == "mfabrik" and task.step is not None:
+            steps = algorithm2(task.planner(), task.start, path.configurations, task.targets, task.step)
+        return ReachRun(task, name, task.targets, tuple(results), path, steps)
+    solve_one = task.solve_function(name)
     targets, starts = task.random_pairs()
     if task.start is not None:
         starts[:] = task.start
     results = []
     for k, (target, x0) in enumerate(zip(targets, starts)):
-        results.append(solve(target, x0, tolerance=tolerance, max_iterations=cap))
+        results.append(solve_one(target, x0, tolerance=tolerance, max_iterations=cap))
         if progress is not None:
             progress(k + 1, len(targets))
-    return ReachRun(task, name, tuple(results))
+    return ReachRun(task, name, targets, tuple(results))
 
 
 def _check_keys(table: dict[str, Any], known: set[str], where: str) -> dict[str, Any]:
