@@ -51,7 +51,8 @@ class Fabrik:
         self._fk = PointKinematics(chain.robot, chain.frame)
 
     def solve(
-        self, target: np.ndarray, x0: np.ndarray, *, tolerance: float = 1e-6, max_iterations: int = 1000
+        self, target: np.ndarray, x0: np.ndarray, *, tolerance: float = 1e-6, max_iterations: int = 1000,
+        seed: int | None = None,
     ) -> ReachResult:
         """Reach ``target`` ``(3,)`` [m, world] from the start configuration ``x0`` ``(n,)``.
 
@@ -60,6 +61,7 @@ class Fabrik:
             x0: start configuration; joints outside the chain keep their values.
             tolerance: success threshold on the position error [m].
             max_iterations: cap on forward + backward iterations.
+            seed: the restarts' chain shapes are drawn from ``default_rng(seed)`` (default: the solver's ``seed``).
         """
         start = time.perf_counter()
         target = check_target(target)
@@ -91,7 +93,7 @@ class Fabrik:
             best, rng = (progress.history[0], xs.copy(), ys.copy()), None
             while (decision := progress.decide()) in ("continue", "restart", "resume"):
                 if decision == "restart":
-                    rng = rng or np.random.default_rng(self.seed)
+                    rng = rng or np.random.default_rng(self.seed if seed is None else seed)
                     xs, ys = random_shape(chain, rng)
                 elif decision == "resume":
                     xs, ys = best[1].copy(), best[2].copy()

@@ -114,7 +114,8 @@ class MFabrik:
 
     # ------------------------------------------------------------------ Algorithm 1
     def solve(
-        self, target: np.ndarray, x0: np.ndarray, *, tolerance: float = 1e-6, max_iterations: int = 1000
+        self, target: np.ndarray, x0: np.ndarray, *, tolerance: float = 1e-6, max_iterations: int = 1000,
+        seed: int | None = None,
     ) -> ReachResult:
         """Reach ``target`` ``(3,)`` [m, world] from ``x0`` ``(n,)``, moving base and arm.
 
@@ -123,6 +124,7 @@ class MFabrik:
             x0: start configuration (base and arm); its heading is the one ``FIXED`` keeps.
             tolerance: success threshold on the position error [m].
             max_iterations: cap on iterations.
+            seed: the restarts' arm shapes are drawn from ``default_rng(seed)`` (default: the planner's ``seed``).
         """
         start = time.perf_counter()
         target = check_target(target)
@@ -155,7 +157,7 @@ class MFabrik:
         rng = None
         while (decision := progress.decide()) in ("continue", "restart", "resume"):
             if decision == "restart":  # a new arm shape, from the base where it stands
-                rng = rng or np.random.default_rng(self.seed)
+                rng = rng or np.random.default_rng(self.seed if seed is None else seed)
                 xs, ys = random_shape(chain, rng)
             elif decision == "resume":  # back to the best state met
                 _, xs, ys, bx, by, th, q_yaw = best

@@ -102,9 +102,9 @@ class MFabrikSolver(IKSolver):
             raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")
         position, obstacles = reach_task(problem)
         x0, start = start_configuration(problem, request, True)
-        method, planner = self._planner(problem.robot, position.frame, obstacles, request.seed)
+        method, planner = self._planner(problem.robot, position.frame, obstacles)
         result = planner.solve(position.target, x0, tolerance=request.tolerance,
-                               max_iterations=request.max_iterations or DEFAULT_ITERATIONS)
+                               max_iterations=request.max_iterations or DEFAULT_ITERATIONS, seed=request.seed)
         stop = _STOP.get(result.reason, "unreachable")
         environment = planner.environment if method == "m-fabrik" else None
         settings = {**self.options.__dict__, "method": method, "start": start, "reason": result.reason,
@@ -114,8 +114,9 @@ class MFabrikSolver(IKSolver):
         return Outcome(result.configuration, stop, result.iterations, result.iterations,
                        history=None, settings=settings, state={"base_path": result.base_path})
 
-    def _planner(self, robot, frame: str, obstacles: Obstacles | None, seed: int):
-        """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot."""
+    def _planner(self, robot, frame: str, obstacles: Obstacles | None):
+        """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot, and
+        so is the planner without an Obstacles term (per options: its environment's areas are computed once)."""
         from .chain import PlanarChain
         from .environment import Environment
         from .fabrik import Fabrik
@@ -127,16 +128,20 @@ class MFabrikSolver(IKSolver):
         window = {} if o.window is None else {"window": o.window}
         if "base" in robot.groups and robot.group("base").size == 3:
             arm = robot.memo(("mfabrik arm", frame), lambda: MobileArm.from_robot(robot, frame))
-            environment = o.environment
-            if obstacles is not None:
-                given = environment or Environment(margin=o.base_margin)
-                environment = Environment.from_scene(obstacles.scene, margin=given.margin, bounds=given.bounds,
-                                                     obstacles=given.obstacles)
-            return "m-fabrik", MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, seed=seed,
-                                       keep_link=o.keep_link, **window)
+
+            def planner(environment):
+                return MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, keep_link=o.keep_link,
+                               **window)
+
+            if obstacles is None:  # the scene of an Obstacles term may move between solves: made each time
+                key = ("mfabrik planner", frame, o.environment, o.orientation, o.restarts, o.window, o.keep_link)
+                return "m-fabrik", robot.memo(key, lambda: planner(o.environment))
+            given = o.environment or Environment(margin=o.base_margin)
+            return "m-fabrik", planner(Environment.from_scene(obstacles.scene, margin=given.margin,
+                                                              bounds=given.bounds, obstacles=given.obstacles))
         if obstacles is not None or o.environment is not None:
             raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
                               "for a mobile base only")
         chain = robot.memo(("fabrik chain", frame), lambda: PlanarChain.from_robot(robot, frame))
         reach = robot.memo(("fabrik reach", frame), lambda: ReachTable.from_chain(chain))
-        return "fabrik", Fabrik(chain, restarts=o.restarts, seed=seed, reach=reach, **window)
+        return "fabrik", Fabrik(chain, restarts=o.restarts, reach=reach, **window)
