@@ -127,7 +127,7 @@ class MFabrikSolver(IKSolver):
         o = self.options
         window = {} if o.window is None else {"window": o.window}
         if "base" in robot.groups and robot.group("base").size == 3:
-            arm = robot.memo(("mfabrik arm", frame), lambda: MobileArm.from_robot(robot, frame))
+            arm = MobileArm.of(robot, frame)
 
             def planner(environment):
                 return MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, keep_link=o.keep_link,

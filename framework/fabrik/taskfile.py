@@ -112,7 +112,7 @@ class ReachTask:
 
     def planner(self, seed: int | None = None) -> MFabrik:
         """The M-FABRIK planner of Algorithm 2's steps (the task's environment and base orientation)."""
-        return MFabrik(MobileArm.from_robot(self.robot, self.frame), self.environment, orientation=self.orientation,
+        return MFabrik(MobileArm.of(self.robot, self.frame), self.environment, orientation=self.orientation,
                        seed=self.solver["seed"] if seed is None else seed)
 
     def solve_function(self, name: str | None = None, *, options: Mapping[str, Any] | None = None,
