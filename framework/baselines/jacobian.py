@@ -24,11 +24,7 @@ import numpy as np
 
 from ..costs import Position, Program
 from ..engine import residuals
-from ..errors import TaskError
 from ..robot import JointKind, Robot
-
-METHODS = ("pinv", "dls")
-
 
 class JacobianRun(NamedTuple):
     """What :func:`jacobian_ik` returns.
@@ -60,15 +56,6 @@ def dls_inverse(J: np.ndarray, damping: float = 0.05) -> np.ndarray:
     """Damped least-squares inverse ``Jᵀ (J Jᵀ + λ² I)⁻¹`` ``(n, m)``; ``λ`` = ``damping`` [m/rad]."""
     m = J.shape[0]
     return J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(m), np.eye(m))
-
-
-def inverse(J: np.ndarray, method: str, *, rcond: float = 1e-6, damping: float = 0.05) -> np.ndarray:
-    """``J⁺`` by ``"pinv"`` (:func:`svd_pinv`) or ``"dls"`` (:func:`dls_inverse`)."""
-    if method == "pinv":
-        return svd_pinv(J, rcond)
-    if method == "dls":
-        return dls_inverse(J, damping)
-    raise TaskError(f"unknown Jacobian method {method!r}; use one of {METHODS}")
 
 
 def position_and_jacobian(robot: Robot, x: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
@@ -112,9 +99,9 @@ def jacobian_ik(
     joint coordinates (the compiled kernels: planar bases and continuous joints included), ``J⁺ =
     inverse_of(J)``. Optionally, as in Buss's code, ``e`` is clamped to the length ``max_error`` and the step
     scaled so that no coordinate moves more than ``max_step`` [rad or m]. ``box`` wraps the angles whose range
-    is a full turn (:func:`full_turns`) and clips the others to the limits (the methods do not know them). Stops when every
-    task block is within ``tolerance`` [m] / ``angle_tolerance`` [rad], after ``max_iterations`` steps, at
-    ``deadline`` (``time.monotonic()``) or when ``callback(step, ‖e‖, x)`` returns True.
+    is a full turn (:func:`full_turns`) and clips the others to the limits (the methods do not know them). Stops
+    when every task block is within ``tolerance`` [m] / ``angle_tolerance`` [rad], after ``max_iterations``
+    steps, at ``deadline`` (``time.monotonic()``) or when ``callback(step, ‖e‖, x)`` returns True.
     """
     lower, upper, wrap = program.robot.lower, program.robot.upper, full_turns(program)
     angle_tolerance = tolerance if angle_tolerance is None else angle_tolerance

@@ -20,8 +20,9 @@ from ..errors import TaskError
 from ..robot import Robot
 from ..tracking import TrackingResult
 from ..trajectory import Trajectory
-from .jacobian import METHODS, inverse, jacobian_ik
+from .jacobian import jacobian_ik
 from .relative import RELATIVE_GAIN, SECONDARY_GAIN, relative_jacobian_ik
+from .solver import JACOBIAN_BASELINES
 
 #: A waypoint counts as reached when its position error is at most this [m] (the papers' tolerance).
 SUCCESS_TOLERANCE = 1e-4
@@ -49,8 +50,9 @@ def jacobian_track(
             waypoint early.
         rcond: SVD cut-off of ``"pinv"``; damping: ``λ`` [m/rad] of ``"dls"``.
     """
-    if method not in METHODS:
-        raise TaskError(f"unknown Jacobian method {method!r}; use one of {METHODS}")
+    if method not in JACOBIAN_BASELINES:
+        raise TaskError(f"unknown Jacobian method {method!r}; use one of {sorted(JACOBIAN_BASELINES)}")
+    baseline = JACOBIAN_BASELINES[method]({"gain": gain, "rcond": rcond, "damping": damping})
     frame = frame or robot.end_effectors[0]
     robot.frame_id(frame)
     x = _initial(robot, initial)
@@ -60,8 +62,8 @@ def jacobian_track(
     for k in range(trajectory.K):
         start = time.perf_counter()
         term.set_target(trajectory.positions[k])
-        run = jacobian_ik(program, x, lambda J: inverse(J, method, rcond=rcond, damping=damping), gain=gain,
-                          max_iterations=iterations_per_point, tolerance=tolerance)
+        run = jacobian_ik(program, x, baseline.inverse_of, gain=gain, max_iterations=iterations_per_point,
+                          tolerance=tolerance)
         x = run.x
         rows.append((x.copy(), run.evaluations, time.perf_counter() - start))
     settings = {

@@ -100,3 +100,7 @@ class DampedLeastSquares(JacobianBaseline):
 
     def inverse_of(self, J: np.ndarray) -> np.ndarray:
         return dls_inverse(J, self.options.damping)
+
+
+#: The baselines by name.
+JACOBIAN_BASELINES: dict[str, type[JacobianBaseline]] = {"pinv": PseudoInverse, "dls": DampedLeastSquares}
