@@ -16,6 +16,7 @@ Steps are clipped to the search box (the robot cannot leave its limits; the meth
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from typing import NamedTuple
@@ -23,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..costs import Position, Program
-from ..engine import residuals
+from ..engine import residual_arrays, residuals
 from ..robot import JointKind, Robot
 
 class JacobianRun(NamedTuple):
@@ -104,17 +105,19 @@ def jacobian_ik(
     steps, at ``deadline`` (``time.monotonic()``) or when ``callback(step, ‖e‖, x)`` returns True.
     """
     lower, upper, wrap = program.robot.lower, program.robot.upper, full_turns(program)
+    wraps = bool(wrap.any())
     angle_tolerance = tolerance if angle_tolerance is None else angle_tolerance
-    ends = np.cumsum(program.task_block_rows)
+    ends = np.cumsum(program.task_block_rows).tolist()
+    blocks = list(zip([0, *ends[:-1]], ends))
+    out = residual_arrays(program)
     x = np.array(x0, dtype=float)
     history: list[float] = []
     steps, stop = 0, "max_iterations"
     while True:
-        r, J = residuals(program, x)
-        history.append(float(np.linalg.norm(r)))
-        squares = np.concatenate(([0.0], np.cumsum(r * r)))
-        blocks = np.sqrt(squares[ends] - squares[ends - program.task_block_rows])
-        if program.within(blocks, tolerance, angle_tolerance):
+        r, J = residuals(program, x, out=out)
+        history.append(math.sqrt(float(r @ r)))
+        errors = [history[-1]] if len(blocks) == 1 else [math.sqrt(float(r[a:b] @ r[a:b])) for a, b in blocks]
+        if program.within(errors, tolerance, angle_tolerance):
             stop = "tolerance"
             break
         if steps >= max_iterations:
@@ -129,7 +132,11 @@ def jacobian_ik(
         biggest = float(np.abs(dx).max())
         if max_step is not None and biggest > max_step:
             dx *= max_step / biggest
-        x = np.where(wrap, lower + np.mod(x + dx - lower, 2 * np.pi), np.clip(x + dx, lower, upper))
+        x = x + dx
+        if wraps:
+            x = np.where(wrap, lower + np.mod(x - lower, 2 * np.pi), np.clip(x, lower, upper))
+        else:
+            np.clip(x, lower, upper, out=x)
         steps += 1
         if callback is not None and callback(steps, history[-1], x.copy()):
             stop = "callback"

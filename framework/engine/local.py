@@ -169,15 +169,22 @@ def solve_local(
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
 
 
-def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK) -> tuple[np.ndarray, np.ndarray]:
+def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK, *,
+              out: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Stacked residuals ``(m,)`` and Jacobians ``(m, n)`` of the blocks of ``level`` at ``x`` (``-1``: levels
-    1 and 2), in block order."""
+    1 and 2), in block order; ``out``: arrays ``(rows,)``, ``(rows, n)`` to write into (a loop's own, made once by
+    :func:`residual_arrays`), of which the leading ``m`` rows are returned."""
     program.refresh()
     x = np.ascontiguousarray(x, dtype=float)
-    rows = int(program.prog[0][:, ROWS].sum())
-    r, J = np.empty(rows), np.empty((rows, x.size))
+    r, J = residual_arrays(program) if out is None else out
     m = residuals_at(x, level, program.kin, program.prog, r, J)
     return r[:m], J[:m]
+
+
+def residual_arrays(program: Program) -> tuple[np.ndarray, np.ndarray]:
+    """Arrays ``(rows,)`` and ``(rows, n)`` holding every block's residual rows (:func:`residuals`' ``out``)."""
+    rows = int(program.prog[0][:, ROWS].sum())
+    return np.empty(rows), np.empty((rows, program.robot.n))
 
 
 def reaching_is_optimal(program: Program, x: np.ndarray, multipliers: np.ndarray | None) -> bool:
