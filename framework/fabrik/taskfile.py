@@ -53,6 +53,7 @@ from ..baselines.solver import BUSS
 from ..costs import Position
 from ..problem import Problem
 from ..solve import IKResult, solve
+from ..solvers.registry import ik_solver
 from ..tracking import TrackingResult, TrackingTask, track
 from ..trajectory import Trajectory
 from .mfabrik import MFabrik
@@ -121,7 +122,7 @@ class ReachTask:
         one reach problem (a :class:`~framework.costs.Position` term, its target moved to each call), with
         :meth:`solver_options`; ``seed`` replaces the task's."""
         name = name or self.solver["name"]
-        chosen = self.solver_options(name, options)
+        chosen = ik_solver(name, self.solver_options(name, options)).options  # checked once, passed as they are
         term = Position(self.frame, np.zeros(3))
         problem = Problem(self.robot, 1.0 * term)
         seed = self.solver["seed"] if seed is None else seed
