@@ -132,3 +132,18 @@ def test_a_baseline_task_run_with_mfabrik_keeps_its_algorithm_2_step(tmp_path):
     assert run_reach_task(task).steps is None  # the baselines do not plan base steps
     steps = run_reach_task(task, solver="mfabrik").steps
     assert all(s is not None and s.longest_step <= 0.02 + 1e-9 for s in steps)
+
+
+@pytest.mark.parametrize("solver", ["pinv", "dls"])
+def test_a_reach_path_is_each_set_point_solved_from_the_previous_solution(solver):
+    """tracking.track drives a reach path exactly as a plain loop of solves warm-started from the previous solution
+    would (no predictor, no spread: the baselines are deterministic, so the configurations are equal bit for bit)."""
+    task = load_task(TASKS / "paper003_sinusoid.toml")
+    run = run_reach_task(task, solver=solver)
+    solve_one, x = task.solve_function(solver), task.start
+    for k, target in enumerate(task.targets):
+        result = solve_one(target, x, tolerance=1e-3, max_iterations=1000)
+        np.testing.assert_array_equal(run.configurations[k], result.configuration)
+        assert run.iterations[k] == result.iterations
+        x = result.configuration
+    assert run.position_errors.max() <= 1e-3 and run.success
