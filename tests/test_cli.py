@@ -172,6 +172,10 @@ def test_solvers_lists_every_solver_with_its_defaults(capsys):
     for name in solver_names():
         assert name in out
     assert "stall=6" in out and "sigma0=None" in out
+    from framework.solvers import ik_solver
+
+    assert all(ik_solver(name).kind for name in solver_names())  # every solver says what kind it is
+    assert ik_solver("mfabrik").kind != ik_solver("de").kind != ik_solver("pinv").kind
 
 
 def test_error_messages_keep_their_brackets(tmp_path, capsys):

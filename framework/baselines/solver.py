@@ -63,6 +63,7 @@ class JacobianBaseline(IKSolver):
 
     Options = JacobianOptions
     uses_jacobians = True
+    kind = "Jacobian baseline"
     method: ClassVar[str] = ""
 
     def inverse_of(self, J: np.ndarray) -> np.ndarray:

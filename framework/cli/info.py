@@ -33,10 +33,9 @@ def solvers_command(args, console: Console) -> int:
         table.add_column(column, overflow="fold")
     for name in [*sorted(IK_SOLVERS), *sorted(SOLVERS)]:
         solver = ik_solver(name)
-        kind = "local engine" if solver.uses_jacobians else "metaheuristic"
         defaults = ", ".join(f"{k}={v!r}" for k, v in solver.defaults().items()) or "—"
         reference = solver.reference or (SOLVERS[name].__doc__ or "").strip().splitlines()[0]
-        table.add_row(name, kind, escape(defaults), escape(reference))
+        table.add_row(name, solver.kind, escape(defaults), escape(reference))
     console.print(table)
     return EXIT_OK
 

@@ -94,6 +94,8 @@ def reach_task(problem) -> tuple[Position, Obstacles | None]:
 class MFabrikSolver(IKSolver):
     """M-FABRIK for a mobile base, FABRIK for a fixed one, behind the common interface."""
 
+    kind = "geometric (FABRIK)"
+
     reference = "paper 003 (M-FABRIK, Algorithm 1); Aristidou & Lasenby 2011 (FABRIK) for fixed bases"
     Options = MFabrikOptions
 

@@ -87,6 +87,7 @@ class Hybrid(IKSolver):
     reference = "ours: Levenberg-Marquardt + task-constrained Newton, CMA-ES (Hansen, arXiv:1604.00772)"
     Options = HybridOptions
     uses_jacobians = True
+    kind = "local engine + global phase"
 
     def __init__(self, options=None):
         super().__init__(options)

@@ -99,7 +99,8 @@ class IKSolver(ABC):
     """One IK method behind one interface.
 
     Class attributes (capabilities, read by tracking and the CLI instead of solver names):
-        name: registry name; reference: where the method comes from.
+        name: registry name; reference: where the method comes from; kind: what it is, in a few words (the
+            solver table of ``metaik solvers``).
         Options: its options dataclass.
         uses_jacobians: a local method (tracking gives it a Jacobian predictor by default).
         carries_distribution: takes its previous solve's :attr:`Outcome.state` (a search distribution) along a
@@ -110,6 +111,7 @@ class IKSolver(ABC):
 
     name: ClassVar[str] = ""
     reference: ClassVar[str] = ""
+    kind: ClassVar[str] = ""
     Options: ClassVar[type] = NoOptions
     uses_jacobians: ClassVar[bool] = False
     carries_distribution: ClassVar[bool] = False

@@ -35,6 +35,8 @@ class Metaheuristic(IKSolver):
     """A registered population algorithm (:class:`~framework.solvers.base.Algorithm`) minimizing the problem's
     weighted cost over the search box. Its options are the algorithm's ``DEFAULTS`` (a mapping)."""
 
+    kind = "metaheuristic"
+
     algorithm: str = ""
 
     def __init__(self, name: str, options: dict[str, Any] | None = None):

@@ -91,6 +91,7 @@ class MultistartLM(IKSolver):
     reference = "Beeson & Ames, TRAC-IK, Humanoids 2015 (restarts); Marquardt, SIAM J. Appl. Math. 11 (1963)"
     Options = MultistartOptions
     uses_jacobians = True
+    kind = "local engine"
 
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, _ = start_configuration(problem, request, self.options.warm_start)
