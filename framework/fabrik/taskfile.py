@@ -43,19 +43,19 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import TaskError
-from ..loading import load_robot
-from ..robot import Robot
-from ..scene import Scene
-from ..task_values import evaluate, trajectory_from_table
-from .environment import Circle, Environment, Polygon, Rectangle
 from ..baselines.solver import BUSS
 from ..costs import Position
+from ..errors import TaskError
+from ..loading import load_robot
 from ..problem import Problem
+from ..robot import Robot
+from ..scene import Scene
 from ..solve import IKResult, solve
 from ..solvers.registry import ik_solver
+from ..task_values import evaluate, trajectory_from_table
 from ..tracking import TrackingResult, TrackingTask, track
 from ..trajectory import Trajectory
+from .environment import Circle, Environment, Polygon, Rectangle
 from .mfabrik import MFabrik
 from .mobile import BaseOrientation, MobileArm
 from .steps import Steps, algorithm2
@@ -181,6 +181,11 @@ class ReachRun:
         """``(k,)`` [m] each target's position error, by Pinocchio's forward kinematics."""
         reached = self.task.robot.frame_poses(self.configurations, self.task.frame).positions[:, 0]
         return np.linalg.norm(reached - self.targets[: len(reached)], axis=1)
+
+    @property
+    def success_rate(self) -> float:
+        """The fraction of targets reached."""
+        return float(np.mean([r.success for r in self.results])) if self.results else float("nan")
 
     @property
     def success(self) -> bool:
