@@ -48,7 +48,6 @@ TOLERANCES_MM = (1.0, 0.1, 0.01, 0.001)
 TASKS = 1000
 MAX_ITERATIONS = 1000
 STEP = 0.1  # Algorithm 2's ρ [m]
-SEED = 3
 
 #: Paper 003 Table 2 (mean time [ms], Matlab, i5 1.8 GHz) and Table 3 (mean iterations), per tolerance above.
 PAPER_TIME_MS = {
@@ -72,13 +71,6 @@ LABELS = {
 
 
 # ---------------------------------------------------------------------------------------------- tasks
-
-
-def random_tasks(robot: fw.Robot, rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """``count`` targets ``(count, 3)`` [m] (forward kinematics of random configurations) and starts ``(count, n)``."""
-    X_target = robot.random_configurations(rng, count)
-    targets = robot.frame_poses(X_target, "arm_ee").positions[:, 0]
-    return targets, robot.random_configurations(rng, count)
 
 
 def sinusoid_task():
@@ -327,9 +319,8 @@ def main(tasks: int = TASKS) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
     robot = fw.load_robot("youbot_mobile")
     arm = MobileArm.from_robot(robot)
-    rng = np.random.default_rng(SEED)
     # every solver through framework.solve, as the task files run them (M-FABRIK's restarts drawn from seed 0)
-    random_task = load_task(TASKS_DIR / "paper003_random_targets.toml")
+    random_task = load_task(TASKS_DIR / "paper003_random_targets.toml", points=tasks)
     solvers = {
         "pinv": random_task.solve_function("pinv"),
         "dls": random_task.solve_function("dls"),
@@ -338,7 +329,7 @@ def main(tasks: int = TASKS) -> None:
     }
 
     print("Tables 2-3", flush=True)
-    targets, starts = random_tasks(robot, rng, tasks)
+    targets, starts = random_task.random_pairs()  # FK of random configurations, random starts (the file's seed)
     table = run_table(solvers, targets, starts)
     samples = iteration_samples(solvers["m-fabrik"], targets, starts)
     plot_iterations(OUT / "paper003_iterations.png", samples)
@@ -366,7 +357,8 @@ def main(tasks: int = TASKS) -> None:
 
     elapsed = time.perf_counter() - started
     load = (load_start, os.getloadavg()[0])
-    write_report(table, samples, path_targets, trackings, scenario_rows, elapsed, tasks, load)
+    write_report(table, samples, path_targets, trackings, scenario_rows, elapsed, tasks, random_task.solver["seed"],
+                 load)
     print(f"wrote {OUT / 'paper003.md'} in {elapsed:.0f} s")
 
 
@@ -378,6 +370,7 @@ def write_report(
     scenario_rows,
     elapsed: float,
     tasks: int,
+    seed: int,
     load: tuple[float, float],
 ) -> None:
     s = BUSS
@@ -409,7 +402,7 @@ def write_report(
         f"## Tables 2-3: {tasks} random targets and start configurations",
         "",
         (
-            f"Targets: forward kinematics of {tasks} configurations drawn uniformly within the bounds (seed {SEED}; about "
+            f"Targets: forward kinematics of {tasks} configurations drawn uniformly within the bounds (seed {seed}; about "
             "10% lie below the floor plane z = 0, which the model does not forbid); starts drawn the same way; the "
             f"same pairs at every tolerance. Iteration cap {MAX_ITERATIONS} for every method. Times and iterations are "
             "means over all runs (failures included); paper values (Matlab, i5 1.8 GHz) in parentheses."

@@ -81,16 +81,16 @@ from .collision import RobotShape
 from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective,
                     Obstacles, Orientation, Position, RelativePose, RelativePosition, SelfCollision)
 from .errors import MetaikError, TaskError
+from .fabrik.taskfile import ReachTask, is_reach_task, reach_task_from_dict
 from .loading import load_robot
+from .placement_taskfile import PlacementTask, is_placement_task, placement_task_from_dict
 from .problem import Problem
 from .resources import data_dir
 from .robot import Robot
 from .scene import Scene
+from .task_values import evaluate, expression_names, read_toml, trajectory_from_table
 from .trajectory import Trajectory
 from .validate import check_table
-from .fabrik.taskfile import ReachTask, is_reach_task, reach_task_from_dict
-from .placement_taskfile import PlacementTask, is_placement_task, placement_task_from_dict
-from .task_values import evaluate, expression_names, read_toml, trajectory_from_table
 
 #: Keys of ``[task]``, and the top-level tables of an IK / tracking task file.
 #: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).

@@ -4,9 +4,9 @@ Layout, in the order data flows: :mod:`~.chain` (which chains, their plane geome
 arm reaches) → :mod:`~.passes` (forward / backward reaching) → :mod:`~.fabrik` (fixed base) → :mod:`~.mobile`,
 :mod:`~.environment`, :mod:`~.regions` (base, obstacles, admissible area) → :mod:`~.mfabrik` (Algorithm 1) →
 :mod:`~.steps` (Algorithm 2, also along a path tracked by :func:`framework.tracking.track`); :mod:`~.solver`
-registers the solver ``mfabrik`` behind :func:`framework.solve`. FABRIK and M-FABRIK return their own :class:`ReachResult` (with the base's path), which
-``mfabrik`` turns into the common result; the Jacobian baselines of paper 003 are the solvers ``pinv`` and ``dls``
-(:mod:`framework.baselines`).
+registers the solver ``mfabrik`` behind :func:`framework.solve`. FABRIK and M-FABRIK return their own
+:class:`ReachResult` (with the base's path), which ``mfabrik`` turns into the common result; the Jacobian
+baselines of paper 003 are the solvers ``pinv`` and ``dls`` (:mod:`framework.baselines`).
 """
 
 from .chain import PlanarChain

@@ -104,7 +104,7 @@ class MFabrikSolver(IKSolver):
             raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")
         position, obstacles = reach_task(problem)
         x0, start = start_configuration(problem, request, True)
-        method, planner = self._planner(problem.robot, position.frame, obstacles)
+        method, planner = self.planner(problem.robot, position.frame, obstacles)
         result = planner.solve(position.target, x0, tolerance=request.tolerance,
                                max_iterations=request.max_iterations or DEFAULT_ITERATIONS, seed=request.seed)
         stop = _STOP.get(result.reason, "unreachable")
@@ -116,7 +116,7 @@ class MFabrikSolver(IKSolver):
         return Outcome(result.configuration, stop, result.iterations, result.iterations,
                        history=None, settings=settings, state={"base_path": result.base_path})
 
-    def _planner(self, robot, frame: str, obstacles: Obstacles | None):
+    def planner(self, robot, frame: str, obstacles: Obstacles | None = None):
         """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot, and
         so is the planner without an Obstacles term (per options: its environment's areas are computed once)."""
         from .chain import PlanarChain

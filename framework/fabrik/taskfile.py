@@ -57,7 +57,7 @@ from ..tracking import TrackingResult, TrackingTask, track
 from ..trajectory import Trajectory
 from .environment import Circle, Environment, Polygon, Rectangle
 from .mfabrik import MFabrik
-from .mobile import BaseOrientation, MobileArm
+from .mobile import BaseOrientation
 from .steps import Steps, algorithm2
 
 #: Solvers of reach tasks.
@@ -111,10 +111,10 @@ class ReachTask:
                                                                  "environment": self.environment}
         return {**chosen, **(options or {})}
 
-    def planner(self, seed: int | None = None) -> MFabrik:
-        """The M-FABRIK planner of Algorithm 2's steps (the task's environment and base orientation)."""
-        return MFabrik(MobileArm.of(self.robot, self.frame), self.environment, orientation=self.orientation,
-                       seed=self.solver["seed"] if seed is None else seed)
+    def planner(self) -> MFabrik:
+        """The M-FABRIK planner of Algorithm 2's steps: the ``mfabrik`` solver's, with the task's environment and base
+        orientation (built once per robot and options)."""
+        return ik_solver("mfabrik", self.solver_options("mfabrik")).planner(self.robot, self.frame)[1]
 
     def solve_function(self, name: str | None = None, *, options: Mapping[str, Any] | None = None,
                        seed: int | None = None) -> Callable[..., IKResult]:
