@@ -247,10 +247,8 @@ def _parameters(problem: Problem, targets) -> tuple[np.ndarray, int]:
     P = np.tile(program.prog[2], (B, 1))
     for k, name in enumerate(problem.names):
         if name in columns:
-            at = 0
-            for start, stop in program.layout.param_slices[k]:
-                P[:, start:stop] = columns[name][:, at : at + stop - start]
-                at += stop - start
+            start, stop = program.layout.param_spans[k]
+            P[:, start:stop] = columns[name]
     return P, B
 
 

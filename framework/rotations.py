@@ -74,6 +74,19 @@ def transform_defect(T) -> int:
     return _rotation_defect(T[:3, :3])
 
 
+@numba.njit(cache=True)
+def pack_transform(T, out) -> int:
+    """:func:`transform_defect` of ``T (4, 4)``; when 0, its position then its row-major rotation into ``out
+    (12,)``."""
+    defect = transform_defect(T)
+    if defect == 0:
+        for a in range(3):
+            out[a] = T[a, 3]
+            for b in range(3):
+                out[3 + 3 * a + b] = T[a, b]
+    return defect
+
+
 def rotation_target(target, quat_xyzw, quat_wxyz, what: str) -> np.ndarray:
     """The rotation matrix of exactly one of ``target`` (matrix, or ``(x, y, z, w)``), ``quat_xyzw``, ``quat_wxyz``."""
     given = [v is not None for v in (target, quat_xyzw, quat_wxyz)]

@@ -205,7 +205,9 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     error_list = errors.tolist()
     # an interrupted solve is never a success, whatever its last point (the user stopped it before its end);
     # with collision terms the exact check has the last word, not their sphere rows
-    collisions = problem.collisions(x) if outcome.collisions is None else outcome.collisions
+    collisions = outcome.collisions
+    if collisions is None and problem.checks_collisions:
+        collisions = problem.collisions(x)
     success = outcome.stop_reason != "interrupted" and program.within(
         error_list, request.tolerance, request.angle_tolerance, exact_checked=collisions is not None) \
         and (collisions is None or not collisions.colliding)

@@ -325,3 +325,35 @@ def test_quaternion_order_is_named():
         Orientation("arm1_ee", rot.as_matrix(), quat_wxyz=[w, x, y, z])
     with pytest.raises(fw.TaskError, match="quat_wxyz must be 4"):
         Orientation("arm1_ee", quat_wxyz=[w, x, y])
+
+
+def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
+    """Moving targets of a problem's terms (``set_target``, re-packed on the next refresh from each term's
+    ``parameters``) gives the parameters and costs of a problem built afresh with those targets, and a term's
+    ``parameters`` are its blocks' concatenated."""
+    X = robot.random_configurations(rng, 4)
+
+    def terms(k):
+        y = X[k]
+        return [fw.Position("arm2_ee", robot.frame_placement(y, "arm2_ee").translation),
+                fw.Pose("arm1_ee", robot.frame_placement(y, "arm1_ee")),
+                Orientation("arm2_ee", robot.frame_placement(y, "arm2_ee").rotation),
+                fw.RelativePose("arm1_ee", "arm2_ee", robot.frame_placement(y, "arm1_ee").actInv(
+                    robot.frame_placement(y, "arm2_ee"))),
+                Motion("base", y[:3])]
+
+    moved = terms(1)
+    problem = Problem(robot, sum(moved[1:], moved[0]))
+    problem.cost(X)  # packed with the first targets
+    fresh = terms(2)
+    for term, new in zip(moved, fresh):
+        target = {fw.Position: lambda t: t.target, fw.Pose: lambda t: t.target, Orientation: lambda t: t.target,
+                  fw.RelativePose: lambda t: (t.position, t.rotation), Motion: lambda t: t.previous}[type(new)](new)
+        term.set_target(target)
+    built = Problem(robot, sum(fresh[1:], fresh[0]))
+    np.testing.assert_array_equal(problem.cost(X), built.cost(X))
+    np.testing.assert_array_equal(problem.program.prog[2], built.program.prog[2])
+    assert not np.array_equal(problem.program.prog[2], Problem(robot, sum(terms(1)[1:], terms(1)[0])).program.prog[2])
+    for term in fresh:
+        blocks = term.blocks(robot)
+        np.testing.assert_array_equal(term.parameters(robot), np.concatenate([b.params for b in blocks]))

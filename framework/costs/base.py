@@ -108,8 +108,15 @@ class Term:
                 probe.set_target(target)
             except TaskError as err:
                 raise TaskError(f"target {k}: {err}") from None
-            rows.append(np.concatenate([b.params for b in probe.blocks(robot) or ()]))
+            rows.append(probe.parameters(robot))
         return np.array(rows, dtype=float).reshape(len(rows), -1)
+
+    def parameters(self, robot: Robot) -> np.ndarray:
+        """``(p,)``: the parameters of the term's blocks at its current target, concatenated in block order (the
+        term's span of the packed program's parameters; a term with a target may give them without building its
+        blocks)."""
+        blocks = self.blocks(robot) or ()
+        return np.concatenate([b.params for b in blocks], dtype=float, casting="unsafe") if blocks else np.zeros(0)
 
     def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport | None:
         """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; the

@@ -7,17 +7,20 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..robot import Robot
-from ..rotations import rotation_from, transform_defect
+from ..rotations import pack_transform, rotation_from
 from . import blocks as B
 from .base import Term, as_vector, finite_rows
 from .program import Block
 
 
-def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(position (3,), rotation (3, 3))`` of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
+def pose_parameters(target, what: str) -> np.ndarray:
+    """``(12,)``: the position then the row-major rotation of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
     ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated."""
+    out = np.empty(12)
     if isinstance(target, tuple) and len(target) == 2:
-        return as_vector(target[0], 3, f"{what} position"), rotation_from(target[1], what)
+        out[:3] = as_vector(target[0], 3, f"{what} position")
+        out[3:] = rotation_from(target[1], what).ravel()
+        return out
     if isinstance(target, pin.SE3):
         T = target.homogeneous  # a new array
     else:
@@ -28,14 +31,20 @@ def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
         if T.shape != (4, 4):
             raise TaskError(f"{what} must be a pinocchio.SE3, a 4x4 matrix or a (position, rotation) pair; "
                             f"got shape {T.shape}")
-    defect = transform_defect(T)
+    defect = pack_transform(T, out)
     if defect == 1:
         raise TaskError(f"{what} holds NaN or inf: {T.tolist()}")
     if defect == 2:
         raise TaskError(f"{what} is not a rotation matrix (RᵀR ≠ I or det < 0)")
     if defect == 3:
         raise TaskError(f"{what}: the last row of a homogeneous matrix must be [0, 0, 0, 1]; got {T[3].tolist()}")
-    return T[:3, 3].copy(), T[:3, :3].copy()
+    return out
+
+
+def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(position (3,), rotation (3, 3))`` of what :func:`pose_parameters` reads; validated."""
+    p = pose_parameters(target, what)
+    return p[:3], p[3:].reshape(3, 3)
 
 
 class Pose(Term):
@@ -58,8 +67,12 @@ class Pose(Term):
 
     def set_target(self, target) -> None:
         """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""
-        self.position, self.rotation = pose_from(target, f"pose target of {self.frame!r}")
+        p = self._parameters = pose_parameters(target, f"pose target of {self.frame!r}")
+        self.position, self.rotation = p[:3], p[3:].reshape(3, 3)  # views of the parameters
         self._touch()
+
+    def parameters(self, robot: Robot) -> np.ndarray:
+        return self._parameters
 
     def target_parameters(self, robot: Robot, targets) -> np.ndarray:
         """``(B, 12)`` positions and row-major rotations of a batch of poses: ``(B, 4, 4)`` homogeneous matrices
@@ -83,8 +96,9 @@ class Pose(Term):
         return pin.SE3(self.rotation, self.position)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
-        return (Block(B.POSITION, B.NORM, 3, self.frames, self.position, tolerance=B.TOL_LINEAR),
-                Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, self.rotation.ravel(), tolerance=B.TOL_ANGULAR))
+        p = self._parameters
+        return (Block(B.POSITION, B.NORM, 3, self.frames, p[:3], tolerance=B.TOL_LINEAR),
+                Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, p[3:], tolerance=B.TOL_ANGULAR))
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         return {self.frame: self.position}

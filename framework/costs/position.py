@@ -36,6 +36,9 @@ class Position(Term):
         """``(B, 3)`` target points [m, world] of a batch, validated at once."""
         return finite_rows(targets, (3,), f"position targets of {self.frame!r}")
 
+    def parameters(self, robot: Robot) -> np.ndarray:
+        return self.target
+
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         return (Block(B.POSITION, B.NORM, 3, self.frames, self.target, tolerance=B.TOL_LINEAR),)
 

@@ -106,10 +106,11 @@ class _Layout:
         self.chains = kinematics.chains
         slot = {f: i for i, f in enumerate(frames)}
         rows, indices, scales, self.block_term = [], [], [], []
-        self.param_slices: list[list[tuple[int, int]]] = [[] for _ in terms]  # per term, per block
+        self.param_spans: list[tuple[int, int]] = []  # per term: its blocks' parameters, contiguous
         self.references: list[tuple[slice, slice]] = []  # (params, idx) of the regularizers' COORDINATES blocks
         pptr = iptr = 0
         for k, (level, blocks) in enumerate(zip(levels, packed)):
+            first = pptr
             for block in blocks or ():
                 count = 0
                 if block.kind == B.COORDINATES:
@@ -123,12 +124,12 @@ class _Layout:
                 fb = slot[block.frames[1]] if len(block.frames) > 1 else -1
                 rows.append([block.kind, block.rho, block.tolerance, level, block.rows, fa, fb, pptr, iptr, k, count])
                 self.block_term.append(k)
-                self.param_slices[k].append((pptr, pptr + size))
                 scales.append(block.scale)
                 if block.kind == B.COORDINATES and level == B.LEVEL_REGULARIZER:
                     self.references.append((slice(pptr, pptr + size), slice(iptr, iptr + count)))
                 pptr += size
                 iptr += count
+            self.param_spans.append((first, pptr))
         self.bint = np.array(rows, dtype=np.int64).reshape(-1, 11)
         self.block_term = np.array(self.block_term, dtype=np.int64)
         self.scales = np.array(scales, dtype=float)
@@ -146,6 +147,7 @@ class _Layout:
                 suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
                 names.append(term.name + (suffix if len(blocks) > 1 else ""))
         self.task_blocks = tuple(names)
+        self.task_blocks_shared = len(set(names)) < len(names)  # a name over several blocks (collision terms)
         self.names = unique_labels(t.name for t in terms)  # the problem's term labels
         # the task terms a task error sums: the collision terms' clearances are left out (the exact check reports
         # contacts; their sphere rows may overlap at an answer coal finds clear)
@@ -206,6 +208,8 @@ class Program:
     def named_errors(self, errors: Sequence[float]) -> dict[str, float]:
         """Task block errors (block order) by name; blocks sharing a name (a collision term's hundreds of sphere
         pairs) report their worst."""
+        if not self.layout.task_blocks_shared:
+            return dict(zip(self.task_blocks, errors))
         named: dict[str, float] = {}
         for name, e in zip(self.task_blocks, errors):
             named[name] = max(e, named.get(name, e))
@@ -256,12 +260,12 @@ class Program:
 
     def refresh(self) -> None:
         """Re-pack the parameters of terms whose targets changed since the last call (a few µs)."""
-        params = self.prog[2]
+        versions = self._versions
         for k, term in enumerate(self.terms):
-            if term.version != self._versions[k]:
-                self._versions[k] = term.version
-                for (start, stop), block in zip(self.layout.param_slices[k], term.blocks(self.robot) or ()):
-                    params[start:stop] = block.params
+            if term.version != versions[k]:
+                versions[k] = term.version
+                start, stop = self.layout.param_spans[k]
+                self.prog[2][start:stop] = term.parameters(self.robot)
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` weighted sums of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
