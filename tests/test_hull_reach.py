@@ -128,16 +128,27 @@ def test_a_batch_reaches_the_plate_targets_as_single_solves_do(plate):
 
 
 def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
-    """The engine redraws a restart that begins in contact (``CLEAR_DRAWS``): its test, any violated one-sided task
-    row, agrees with the collision term's value (positive exactly when a pair is closer than the margin) over
-    random youBot configurations, most of which are in contact."""
-    from framework.engine.local import residuals
-    from framework.engine.reach import hinge_violated
+    """The engine redraws a restart that begins in contact (``CLEAR_DRAWS``): its test, no one-sided task row
+    violated (stopping at the first one that is), agrees with the collision term's value (positive exactly when a
+    pair is closer than the margin) over random youBot configurations, most of which are in contact; a draw ends
+    at the first clear one, within the box."""
+    from framework.costs.kernels import hinges_clear, workspace
+    from framework.engine.draws import stream
+    from framework.engine.local import search_box
+    from framework.engine.reach import CLEAR_DRAWS, fresh_start
 
     robot = fw.load_robot("youbot_dual_mobile")
     problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.0, 0.4]) + fw.SelfCollision(fw.RobotShape(robot)))
+    program = problem.program
     X = robot.random_configurations(rng, 60)
     values = problem.values(X)[:, 1]
-    found = [hinge_violated(problem.program.prog, residuals(problem.program, x)[0]) for x in X]
-    assert found == [bool(v > 0) for v in values.tolist()]
-    assert 0 < sum(found) < len(found)
+    ws = workspace(program.kin, program.prog, robot.n)
+    clear = [hinges_clear(x, program.kin, program.prog, ws) for x in X]
+    assert clear == [bool(v == 0) for v in values.tolist()]
+    assert 0 < sum(clear) < len(clear)
+    lower, upper, box_wrap = search_box(program)
+    draws, x = stream(3), np.empty(robot.n)
+    for _ in range(20):
+        count = fresh_start(draws, lower, upper, box_wrap, program.kin, program.prog, x)
+        assert 1 <= count <= CLEAR_DRAWS and np.all((lower <= x) & (x <= upper))
+        assert problem.values(x[None])[0, 1] == 0 or count == CLEAR_DRAWS  # clear, or every draw in contact

@@ -107,6 +107,30 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     return row
 
 
+@numba.njit(cache=True)
+def hinges_clear(x, kin, prog, ws) -> bool:
+    """Whether no one-sided task block (a distance band, a cone, a collision row) is violated at ``x``: the poses
+    into ``ws``, then the one-sided blocks in order until the first violated one (most random configurations of a
+    dual arm are in contact: the first contact decides). Other blocks' rows in ``ws`` are left as they were."""
+    jint, jgeo, fslot, fgeo = borrow_kin(kin)
+    prog = borrow_prog(prog)
+    bint, params, idx, wrap = prog[0], prog[2], prog[3], prog[4]
+    out, W, Jf, r, Jr, L3, E9 = borrow_ws(ws)
+    x = borrow(x)
+    fk_one(x, jint, jgeo, fslot, fgeo, out, W)
+    row = ROW0
+    for b in range(bint.shape[0]):
+        if bint[b, LEVEL] != LEVEL_TASK:
+            continue
+        rows = bint[b, ROWS]
+        if is_hinge(bint[b, KIND]):
+            block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, False, L3, E9)
+            if not rows_clear(r, row, rows):
+                return False
+        row += rows
+    return True
+
+
 @numba.njit(cache=True, inline="always")
 def rows_clear(r, row, rows) -> bool:
     """Whether the residual rows ``r[row:row + rows]`` are all zero."""

@@ -23,7 +23,7 @@ from ..costs.program import Program
 from ..errors import SolverError
 from . import newton
 from .draws import stream
-from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
+from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, fresh_start, reach
 
 _REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
                       newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
@@ -111,6 +111,16 @@ class LocalResult(NamedTuple):
 def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(lower, upper, box_wrap)``: the robot's box and which coordinates wrap around instead of stopping."""
     return program.robot.lower, program.robot.upper, program.layout.box_wrap
+
+
+def random_start(program: Program, rng: np.ndarray) -> np.ndarray:
+    """``(n,)`` a start drawn as the engine's restarts draw theirs — uniformly in the box, again while in contact
+    (up to :data:`~framework.engine.reach.CLEAR_DRAWS` draws) — from the stream ``rng`` (advanced)."""
+    program.refresh()
+    lower, upper, box_wrap = search_box(program)
+    x = np.empty(program.robot.n)
+    fresh_start(rng, lower, upper, box_wrap, program.kin, program.prog, x)
+    return x
 
 
 def _nanoseconds(deadline: float | None) -> int:

@@ -15,6 +15,9 @@ Contact rows are taken lazily: each start first descends without the collision b
 the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
 blocks are evaluated, and only if one is violated does the descent go on with every block, from there. Most
 answers are clear of contact (an active-set view of the inequalities: the inactive ones cost one evaluation).
+Once the contact rows are on, a start that stalls for :data:`CONTACT_STALL` iterations is given up, whatever its
+own stall rule (it presses into a contact). Restarts are drawn clear of contact when a few draws find such a
+start (:func:`draw_start`; each draw stops at its first violated one-sided block).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import numba
 import numpy as np
 
 from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, SOLIDS, SPHERES, is_hinge
-from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, rows_clear, task_errors, term_values, within_tolerance, workspace
+from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
@@ -40,6 +43,12 @@ POLISHED = 1e-30
 #: Draws a restart may take to begin clear of the one-sided blocks (contact): a start inside a collision spends
 #: its first iterations getting out; most random configurations of a dual arm are in contact.
 CLEAR_DRAWS = 16
+#: ``stall`` once the contact rows are on (a start's descent met the rest of the task in contact): a descent that
+#: presses into a contact without progress is blocked there, whatever patience the start was given (a warm
+#: start's patient rule is for slow descents near singularities). Tuned on 40 dual-youBot targets the
+#: unconstrained answer collides on (benchmarks/collisions.py): 5 and 8 found other, costlier answers; 10 to 40
+#: the same answers, 10 the fewest iterations.
+CONTACT_STALL = 10
 
 
 @numba.njit(cache=True)
@@ -96,19 +105,33 @@ def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> 
 
 
 @numba.njit(cache=True)
-def hinge_violated(prog, r) -> bool:
-    """Whether a one-sided task block (a distance band, a cone, a collision row) is violated in the stacked task
-    residuals ``r``."""
+def has_hinges(prog) -> bool:
+    """Whether ``prog`` has a one-sided task block (a distance band, a cone, a collision row)."""
     bint = prog[0]
-    row = 0
     for b in range(bint.shape[0]):
-        if bint[b, LEVEL] != LEVEL_TASK:
-            continue
-        rows = bint[b, ROWS]
-        if is_hinge(bint[b, KIND]) and not rows_clear(r, row, rows):
+        if bint[b, LEVEL] == LEVEL_TASK and is_hinge(bint[b, KIND]):
             return True
-        row += rows
     return False
+
+
+@numba.njit(cache=True)
+def draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x) -> int:
+    """A new start ``x (n,)`` drawn uniformly in the box from the stream ``rng``, drawn again (up to
+    :data:`CLEAR_DRAWS` times) while a one-sided block is violated there; returns the draws evaluated (0 without
+    one-sided blocks: nothing to be clear of). ``ws``: a :func:`~framework.costs.kernels.workspace` (scratch)."""
+    hinged = has_hinges(prog)
+    for k in range(CLEAR_DRAWS if hinged else 1):
+        uniform_in_box(rng, lower, upper, x)
+        project(x, lower, upper, box_wrap)
+        if not hinged or hinges_clear(x, kin, prog, ws):
+            return k + 1 if hinged else 0
+    return CLEAR_DRAWS
+
+
+@numba.njit(cache=True)
+def fresh_start(rng, lower, upper, box_wrap, kin, prog, x) -> int:
+    """:func:`draw_start` with its own scratch (for callers outside the compiled loops)."""
+    return draw_start(rng, lower, upper, box_wrap, kin, prog, workspace(kin, prog, x.shape[0]), x)
 
 
 @numba.njit(cache=True)
@@ -239,24 +262,15 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
             checkpoint, since = e, 0
         else:
             since += 1
-        if since >= stall or damping > DAMPING_MAX:
+        if since >= (stall if lazy or not has_contacts else min(stall, CONTACT_STALL)) or damping > DAMPING_MAX:
             if restarted >= restarts:
                 status = STARTS
                 break
-            for _ in range(CLEAR_DRAWS):  # a start clear of the hinges (contact) if a few draws find one
-                uniform_in_box(rng, lower, upper, x)
-                project(x, lower, upper, box_wrap)
-                linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
-                evaluations += 1
-                if not hinge_violated(prog, ws[3]):
-                    break
+            evaluations += max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1)
             restarted += 1
-            if has_contacts:  # a new start descends without the contact rows first, again
-                lazy, cur = True, lazy_prog
-                m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
-                Jc = Jc_all[: m * n].reshape((m, n))
-            else:
-                linearize(x, TASK, kin, cur, ws, YES, JACOBIANS_FROM_POSES)
+            lazy, cur = has_contacts, lazy_prog if has_contacts else prog  # without the contact rows first, again
+            m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+            Jc = Jc_all[: m * n].reshape((m, n))
             e = squared_norm(ws[3], m)
             if e < best_e[int(lazy)]:
                 best_e[int(lazy)], best[int(lazy)] = e, x

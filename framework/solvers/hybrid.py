@@ -4,7 +4,8 @@
    configuration the regularizers measure from (motion's ``q_prev``), else the middle of the box:
    Levenberg-Marquardt reaches the task, Newton steps minimize the regularizers on it. From a warm start the
    engine first stays in its basin (no restart; along a path a restart would jump to another branch), then
-   restarts from random configurations if that basin misses; from the middle it restarts at once.
+   restarts from random configurations if that basin misses (the first of them drawn too: the warm start's
+   basin was searched); from the middle it restarts at once.
 2. If that misses the task, a short global phase of a metaheuristic (``cmaes_fast``, 30 generations) from a
    uniform start picks another point for the engine (the better of the two is kept). An explicit
    ``global_iterations`` runs the global phase first instead.
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalResult, LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from ..engine.local import random_start
 from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
@@ -136,7 +138,9 @@ class Hybrid(IKSolver):
             return run.x
 
         def better(a, b):  # the engine result that reaches the task, else the lower cost
-            return min((a, b), key=lambda c: (not c.reached, float(problem.cost(c.x)[0])))
+            if a.reached != b.reached:
+                return a if a.reached else b
+            return min((a, b), key=lambda c: float(problem.cost(c.x)[0]))
 
         hull_runs: list = []  # each run of the hull steps (its LocalResult)
 
@@ -178,10 +182,11 @@ class Hybrid(IKSolver):
         if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
             best, check = clear_first(x0, first)
         if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
-            best = hulls(engine(x0, first))  # to leave it), then random restarts
-            if not best.reached and first is not settings and request.time_left() > 0:
+            best = hulls(engine(x0, first))  # to leave it), then random restarts (that basin was searched: the
+            if not best.reached and first is not settings and request.time_left() > 0:  # first is drawn too)
                 found, check = clear_first(x0, settings) if loose else (None, None)
-                best = found if found is not None else better(best, hulls(engine(x0)))
+                best = found if found is not None else better(
+                    best, hulls(engine(random_start(problem.program, draws))))
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = hulls(engine(global_phase(None, GLOBAL_ITERATIONS)))
