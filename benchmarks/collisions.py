@@ -85,6 +85,17 @@ def _row(label: str, rows: list[tuple[bool, bool, float, bool]]) -> str:
             f"{hulls} | {np.median(ms):.2f} | {np.percentile(ms, 95):.2f} |")
 
 
+#: Kept youBot targets (in drawing order) the engine's contact stall rule was tuned on; the rest are held out.
+TUNED = 40
+
+
+def _ratio(coll: list, free: list) -> str:
+    """Median solve time of ``coll`` over that of ``free`` (rows of :func:`_row`), e.g. ``2.1x``."""
+    if not coll:
+        return "(none)"
+    return f"{np.median([t for _, _, t, _ in coll]) / np.median([t for _, _, t, _ in free]):.2f}x"
+
+
 HEADER = ["| solve | targets | task met % | no contact % | success % (both) | answers on hulls | median ms | p95 ms |",
           "|---|---:|---:|---:|---:|---:|---:|---:|"]
 
@@ -138,7 +149,12 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                                _row("the same targets, SelfCollision", kept_coll)]
     lines += ["", f"{len(kept_coll)} random targets kept of {tries} drawn (the others: the sampled configuration "
               "collides, or the unconstrained solve does not). Building a problem with the collision term "
-              f"(packing its blocks): median {1e3 * np.median(build):.2f} ms."]
+              f"(packing its blocks): median {1e3 * np.median(build):.2f} ms.", "",
+              "The collision term's cost, median solve time with it / without it: " + "; ".join(
+                  f"{label} {_ratio(kept_coll[part], kept_free[part])}" for label, part in (
+                      ("all kept targets", slice(None)),
+                      (f"the first {TUNED} (the engine's CONTACT_STALL was tuned on them)", slice(None, TUNED)),
+                      (f"the other {max(len(kept_coll) - TUNED, 0)} (held out)", slice(TUNED, None)))) + "."]
     free, coll = problems(np.zeros(3), np.zeros(3))
     stats = {"shape": shape, "robot": robot, "free": free, "coll": coll, "blocks": len(coll.program.task_blocks),
              "spheres": len(shape.cover().radii), "pairs": len(shape.pairs)}

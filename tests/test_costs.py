@@ -357,3 +357,15 @@ def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
     for term in fresh:
         blocks = term.blocks(robot)
         np.testing.assert_array_equal(term.parameters(robot), np.concatenate([b.params for b in blocks]))
+
+
+def test_named_errors_report_the_worst_block_of_a_name(robot, rng):
+    """Blocks sharing a name (here two terms named alike, one between them named otherwise: not contiguous) report
+    their largest error; a name of one block its own."""
+    x = robot.random_configurations(rng, 1)[0]
+    a, b = robot.frame_placement(x, "arm1_ee").translation, robot.frame_placement(x, "arm2_ee").translation
+    problem = Problem(robot, Position("arm1_ee", a + [0.1, 0, 0], name="p") + Position("arm2_ee", b, name="q")
+                      + Position("arm2_ee", b + [0, 0.3, 0], name="p"))
+    errors = problem.program.task_errors(x).tolist()
+    assert errors == pytest.approx([0.1, 0.0, 0.3], abs=1e-12)
+    assert problem.program.named_errors(errors) == {"p": errors[2], "q": errors[1]}

@@ -147,7 +147,12 @@ class _Layout:
                 suffix = {B.TOL_ANGULAR: ".angle", B.TOL_LINEAR: ".distance"}.get(block.tolerance, "")
                 names.append(term.name + (suffix if len(blocks) > 1 else ""))
         self.task_blocks = tuple(names)
-        self.task_blocks_shared = len(set(names)) < len(names)  # a name over several blocks (collision terms)
+        groups: dict[str, list[int]] = {}
+        for k, name in enumerate(names):
+            groups.setdefault(name, []).append(k)
+        # a name over several blocks (a collision term's rows): its blocks, as a slice when they are contiguous
+        self.task_block_groups = None if len(groups) == len(names) else tuple(
+            (name, slice(ks[0], ks[-1] + 1) if ks[-1] - ks[0] + 1 == len(ks) else ks) for name, ks in groups.items())
         self.names = unique_labels(t.name for t in terms)  # the problem's term labels
         # the task terms a task error sums: the collision terms' clearances are left out (the exact check reports
         # contacts; their sphere rows may overlap at an answer coal finds clear)
@@ -208,12 +213,10 @@ class Program:
     def named_errors(self, errors: Sequence[float]) -> dict[str, float]:
         """Task block errors (block order) by name; blocks sharing a name (a collision term's hundreds of sphere
         pairs) report their worst."""
-        if not self.layout.task_blocks_shared:
+        groups = self.layout.task_block_groups
+        if groups is None:
             return dict(zip(self.task_blocks, errors))
-        named: dict[str, float] = {}
-        for name, e in zip(self.task_blocks, errors):
-            named[name] = max(e, named.get(name, e))
-        return named
+        return {name: max(errors[ks]) if isinstance(ks, slice) else max(errors[k] for k in ks) for name, ks in groups}
 
     def task_errors(self, x: np.ndarray) -> np.ndarray:
         """``(blocks,)`` each task block's error ``‖r_b‖`` at one configuration ``x`` ``(n,)`` [m, or rad for
