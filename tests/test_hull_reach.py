@@ -134,8 +134,8 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
     at the first clear one, within the box."""
     from framework.costs.kernels import hinges_clear, workspace
     from framework.engine.draws import stream
-    from framework.engine.local import search_box
-    from framework.engine.reach import CLEAR_DRAWS, fresh_start
+    from framework.engine.local import LocalSettings, solve_local
+    from framework.engine.reach import CLEAR_DRAWS
 
     robot = fw.load_robot("youbot_dual_mobile")
     problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.0, 0.4]) + fw.SelfCollision(fw.RobotShape(robot)))
@@ -146,9 +146,9 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
     clear = [hinges_clear(x, program.kin, program.prog, ws) for x in X]
     assert clear == [bool(v == 0) for v in values.tolist()]
     assert 0 < sum(clear) < len(clear)
-    lower, upper, box_wrap = search_box(program)
-    draws, x = stream(3), np.empty(robot.n)
-    for _ in range(20):
-        count = fresh_start(draws, lower, upper, box_wrap, program.kin, program.prog, x)
-        assert 1 <= count <= CLEAR_DRAWS and np.all((lower <= x) & (x <= upper))
+    draws, drawn = stream(3), LocalSettings(max_iterations=0, restarts=False, regularize=False)
+    for _ in range(20):  # a drawn start (x0 None), no iteration: the draw itself
+        result = solve_local(program, None, draws, drawn)
+        x, count = result.x, result.evaluations - 1
+        assert 1 <= count <= CLEAR_DRAWS and np.all((robot.lower <= x) & (x <= robot.upper))
         assert problem.values(x[None])[0, 1] == 0 or count == CLEAR_DRAWS  # clear, or every draw in contact

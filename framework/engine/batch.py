@@ -19,6 +19,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from ..costs.kernels import NO
 from ..costs.program import Program
 from . import newton
 from .clock import monotonic_ns
@@ -57,7 +58,7 @@ def descend(items, X, restarts, streams, P, lower, upper, box_wrap, kin, prog, t
         begin = monotonic_ns()
         deadline = begin + budget_ns[i] if budget_ns[i] > 0 else 0
         x = X[i]
-        code = reach(x, restarts, streams[i : i + 1], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
+        code = reach(x, NO, restarts, streams[i : i + 1], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
                      max_iterations[i], stall, deadline, polish, E[i], V[i], stats)
         counts[i, 0] += stats[0]
         counts[i, 1] += stats[1]

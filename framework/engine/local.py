@@ -22,8 +22,8 @@ from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
 from . import newton
-from .draws import stream
-from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, fresh_start, reach
+from .draws import draws, stream
+from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
 
 _REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
                       newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
@@ -113,16 +113,6 @@ def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return program.robot.lower, program.robot.upper, program.layout.box_wrap
 
 
-def random_start(program: Program, rng: np.ndarray) -> np.ndarray:
-    """``(n,)`` a start drawn as the engine's restarts draw theirs — uniformly in the box, again while in contact
-    (up to :data:`~framework.engine.reach.CLEAR_DRAWS` draws) — from the stream ``rng`` (advanced)."""
-    program.refresh()
-    lower, upper, box_wrap = search_box(program)
-    x = np.empty(program.robot.n)
-    fresh_start(rng, lower, upper, box_wrap, program.kin, program.prog, x)
-    return x
-
-
 def _nanoseconds(deadline: float | None) -> int:
     """A ``time.monotonic()`` deadline [s] as the compiled loops' ``deadline_ns`` (``0``: none)."""
     return 0 if deadline is None else int(deadline * 1e9)
@@ -130,7 +120,7 @@ def _nanoseconds(deadline: float | None) -> int:
 
 def solve_local(
     program: Program,
-    x0: np.ndarray,
+    x0: np.ndarray | None,
     rng: int | np.ndarray | np.random.Generator,
     settings: LocalSettings = LocalSettings(),
     *,
@@ -140,7 +130,8 @@ def solve_local(
 
     Args:
         program: the packed problem (:attr:`framework.problem.Problem.program`).
-        x0: ``(n,)`` first start (float64).
+        x0: ``(n,)`` first start (float64); ``None``: drawn from ``rng`` as the restarts draw theirs (uniformly in
+            the box, again while in contact, up to :data:`~framework.engine.reach.CLEAR_DRAWS` draws).
         rng: the restart configurations' stream (:func:`~framework.engine.draws.stream`, advanced in place, so
             successive calls draw new configurations), or a seed to make one from.
         settings: tolerances, budgets and phases.
@@ -148,7 +139,12 @@ def solve_local(
     """
     program.refresh()
     lower, upper, box_wrap = search_box(program)
-    x = np.array(x0, dtype=float)
+    rng = rng if isinstance(rng, np.ndarray) else stream(rng)
+    drawn = x0 is None
+    if drawn and not program.task_rows:  # no descent to draw it
+        x = draws(rng, lower, upper, 1)[0]
+    else:
+        x = np.empty(program.robot.n) if drawn else np.array(x0, dtype=float)
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
     deadline_ns = _nanoseconds(deadline)
@@ -157,7 +153,7 @@ def solve_local(
     values = np.zeros(len(program.terms))
     code = REACHED
     if program.task_rows:
-        code = reach(x, settings.max_restarts, rng if isinstance(rng, np.ndarray) else stream(rng),
+        code = reach(x, drawn, settings.max_restarts, rng,
                      lower, upper, box_wrap, program.kin, program.prog, settings.tolerance, settings.angular,
                      settings.max_iterations, settings.stall, deadline_ns, settings.polish, errors, values, stats)
     iterations, evaluations, restarts = stats.tolist()

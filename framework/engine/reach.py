@@ -129,12 +129,6 @@ def draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x) -> int:
 
 
 @numba.njit(cache=True)
-def fresh_start(rng, lower, upper, box_wrap, kin, prog, x) -> int:
-    """:func:`draw_start` with its own scratch (for callers outside the compiled loops)."""
-    return draw_start(rng, lower, upper, box_wrap, kin, prog, workspace(kin, prog, x.shape[0]), x)
-
-
-@numba.njit(cache=True)
 def without_contacts(bint):
     """A copy of the block table ``bint`` with the collision blocks (``SPHERES``, ``SOLIDS``) of the task taken out
     of it (level 0: no level selects them), and whether there were any."""
@@ -168,13 +162,14 @@ def squared_norm(r, m) -> float:
 
 
 @numba.njit(cache=True)
-def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations, stall,
-          deadline_ns, polish, errors, values, stats) -> int:
+def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations,
+          stall, deadline_ns, polish, errors, values, stats) -> int:
     """Drive every task block within tolerance from ``x (n,)``, then from random configurations in the box.
 
     Args:
-        x: first start; on return the configuration reached, or the best one seen (smallest ``‖r‖`` over every
-            block; over the blocks but the contact rows if no descent got to evaluate those).
+        x: first start (with ``drawn``: drawn here, as a restart draws its start); on return the configuration
+            reached, or the best one seen (smallest ``‖r‖`` over every block; over the blocks but the contact rows
+            if no descent got to evaluate those).
         restarts: how many times a stalled descent may restart from a configuration drawn from ``rng`` (the
             stream ``uint64 (1,)`` of :mod:`~framework.engine.draws`, advanced).
         tol_linear, tol_angular: tolerances of position-like [m] and orientation [rad] blocks.
@@ -197,6 +192,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
     lazy = has_contacts  # the descent sees the blocks without the contact rows first
     cur = lazy_prog if lazy else prog
+    drew = max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1) if drawn else 0
     project(x, lower, upper, box_wrap)
     m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
     full = rows_of(prog, TASK)
@@ -216,7 +212,7 @@ def reach(x, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_a
     best_e = np.full(2, np.inf)  # their ‖r‖², each in its own view
     best_e[int(lazy)], best[int(lazy)] = e, x
     damping, checkpoint, since = DAMPING_START, e, 0
-    iterations, evaluations, restarted = 0, 1, 0
+    iterations, evaluations, restarted = 0, 1 + drew, 0
     status = ITERATIONS
     while True:
         task_errors(cur, ws[3], errors)

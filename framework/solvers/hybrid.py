@@ -37,7 +37,6 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalResult, LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
-from ..engine.local import random_start
 from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
@@ -117,7 +116,7 @@ class Hybrid(IKSolver):
         iterations = evaluations = restarts = 0
         history: list[float] = []
 
-        def engine(x: np.ndarray, settings: LocalSettings = settings, program=problem.program):
+        def engine(x: np.ndarray | None, settings: LocalSettings = settings, program=problem.program):
             nonlocal iterations, evaluations, restarts
             result = solve_local(program, x, draws, settings, deadline=request.deadline)
             iterations, evaluations = iterations + result.iterations, evaluations + result.evaluations
@@ -185,8 +184,7 @@ class Hybrid(IKSolver):
             best = hulls(engine(x0, first))  # to leave it), then random restarts (that basin was searched: the
             if not best.reached and first is not settings and request.time_left() > 0:  # first is drawn too)
                 found, check = clear_first(x0, settings) if loose else (None, None)
-                best = found if found is not None else better(
-                    best, hulls(engine(random_start(problem.program, draws))))
+                best = found if found is not None else better(best, hulls(engine(None)))  # a drawn start
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = hulls(engine(global_phase(None, GLOBAL_ITERATIONS)))
