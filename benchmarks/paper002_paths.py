@@ -319,11 +319,22 @@ def sign_test_lines(runs: dict, solvers: list[str], reference: str = "de") -> li
         "- The hybrid (ours) minimizes the same f from the previous pose's solution with the compiled local engine "
         "(the weighted sum as the paper states it, by active sets of the task terms): "
         "it has the lowest or near-lowest f on the Puma and Fanuc circles, but as a local method it follows the "
-        "branch it starts on, where DE's population can switch branch (the youBot lemniscate: DE lower on 65 of 73 "
-        "poses).",
+        "branch it starts on, where DE's population can switch branch" + _branch_note(runs, reference) + ".",
         "",
     ]
     return lines
+
+
+def _branch_note(runs: dict, reference: str) -> str:
+    """`` (the youBot lemniscate: DE lower on w of N poses)`` from the runs (empty without them)."""
+    from framework.stats import sign_test
+
+    key = ("youbot", "lemniscate")
+    if (*key, reference) not in runs or (*key, "hybrid") not in runs:
+        return ""
+    theirs, ours = runs[(*key, reference)]["cost"], runs[(*key, "hybrid")]["cost"]
+    t = sign_test(theirs, ours, atol=1e-12)
+    return f" (the youBot lemniscate: {reference.upper()} lower on {t.wins} of {len(ours)} poses)"
 
 
 def write_figures(runs: dict, solvers: list[str]) -> None:
