@@ -357,6 +357,14 @@ def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
     for term in fresh:
         blocks = term.blocks(robot)
         np.testing.assert_array_equal(term.parameters(robot), np.concatenate([b.params for b in blocks]))
+    # a term of a fixed layout (its class and frames decide it) packs blocks of one signature whatever its target:
+    # the problem built afresh found the moved one's layout without building its blocks
+    assert built.program.layout is problem.program.layout
+    for term, new in zip(moved, fresh):
+        assert term.packed(robot)[1] == new.packed(robot)[1]
+        if new.fixed_layout:
+            assert new.layout_key(robot) == (type(new), new.frames)
+    assert not Motion("base", X[0, :3]).fixed_layout  # its layout depends on its coordinates
 
 
 def test_named_errors_report_the_worst_block_of_a_name(robot, rng):

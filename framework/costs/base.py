@@ -53,6 +53,10 @@ class Term:
     frames: tuple[str, ...] = ()
     level: str = "regularizer"
     version: int = 0
+    #: Whether the term's blocks are laid out (kinds, rows, sizes; not their parameters' values) by its class and
+    #: frames alone: a problem then finds its packed layout without building the blocks (a subclass whose
+    #: blocks depend on more must set it back to ``False``).
+    fixed_layout: bool = False
     #: Whether :meth:`set_target` moves a target (tracking and batches move it).
     has_target: bool = False
     #: Whether :meth:`collisions` checks something (collision terms).
@@ -81,6 +85,13 @@ class Term:
         signature = None if blocks is None else tuple(b.signature() for b in blocks)
         self._packed = (robot, self.version, blocks, signature)
         return blocks, signature
+
+    def layout_key(self, robot: Robot) -> tuple | None:
+        """What decides the term's part of a packed layout: its class and frames with :attr:`fixed_layout`, else
+        its blocks' signature (``None``: no blocks)."""
+        if self.fixed_layout:
+            return (type(self), self.frames)
+        return self.packed(robot)[1]
 
     def value(self, robot: Robot, X: np.ndarray, poses: FramePoses | None = None) -> np.ndarray:
         """Unweighted value of each member of ``X`` ``(pop, n)``: shape ``(pop,)``.
@@ -115,7 +126,7 @@ class Term:
         """``(p,)``: the parameters of the term's blocks at its current target, concatenated in block order (the
         term's span of the packed program's parameters; a term with a target may give them without building its
         blocks)."""
-        blocks = self.blocks(robot) or ()
+        blocks = self.packed(robot)[0] or ()
         return np.concatenate([b.params for b in blocks], dtype=float, casting="unsafe") if blocks else np.zeros(0)
 
     def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport | None:
@@ -185,8 +196,10 @@ class Objective:
     @classmethod
     def of(cls, objective: Term | Objective | Iterable[tuple[float, Term]]) -> Objective:
         """``objective`` as an :class:`Objective`: a term (weight 1), an objective, or ``(weight, term)`` pairs."""
-        if isinstance(objective, Term):
-            return cls(((1.0, objective),))
+        if isinstance(objective, Term):  # one pair, nothing to check: made without __post_init__'s checks
+            made = object.__new__(cls)
+            object.__setattr__(made, "terms", ((1.0, objective),))
+            return made
         if isinstance(objective, Objective):
             return objective
         try:

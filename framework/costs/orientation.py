@@ -29,6 +29,7 @@ class Orientation(Term):
 
     level = "task"
     has_target = True
+    fixed_layout = True
 
     def __init__(self, frame: str, target: Sequence[float] | np.ndarray | None = None, *,
                  quat_xyzw: Sequence[float] | None = None, quat_wxyz: Sequence[float] | None = None,

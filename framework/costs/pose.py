@@ -58,6 +58,7 @@ class Pose(Term):
 
     level = "task"
     has_target = True
+    fixed_layout = True
 
     def __init__(self, frame: str, target, *, name: str | None = None):
         self.frame = frame

@@ -20,6 +20,7 @@ class Position(Term):
 
     level = "task"
     has_target = True
+    fixed_layout = True
 
     def __init__(self, frame: str, target: Sequence[float], *, name: str | None = None):
         self.frame = frame

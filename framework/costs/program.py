@@ -141,6 +141,7 @@ class _Layout:
         self.levels_present = frozenset(self.bint[:, B.LEVEL].tolist())
         self.term_kinds = tuple(_kind(level, blocks) for level, blocks in zip(levels, packed))
         self.generic = [k for k, p in enumerate(packed) if p is None]
+        self.packed_terms = tuple(k for k, p in enumerate(packed) if p)  # the terms whose parameters are packed
         names = []
         for term, level, blocks in zip(terms, levels, packed):
             for block in (blocks or ()) if level == B.LEVEL_TASK else ():
@@ -190,12 +191,12 @@ class Program:
         self.robot = robot
         self.terms: tuple[Term, ...] = tuple([t for _, t in objective])
         weights = self.weight_list = tuple([w for w, _ in objective])  # floats (``Objective`` checked them)
-        packed = [t.packed(robot) for t in self.terms]
-        key = ("layout", tuple((t.level, t.name, signature) for t, (_, signature) in zip(self.terms, packed)))
-        layout = robot.memo(key, lambda: _Layout(robot, self.terms, [blocks for blocks, _ in packed]))
+        terms = self.terms
+        key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
+        layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
         self.layout = layout
         self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
-        flat = [b.params for blocks, _ in packed if blocks for b in blocks]
+        flat = [terms[k].parameters(robot) for k in layout.packed_terms]
         params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
         self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows

@@ -21,6 +21,7 @@ class RelativePosition(Term):
 
     level = "task"
     has_target = True
+    fixed_layout = True
 
     def __init__(self, frame_a: str, frame_b: str, offset: Sequence[float], *, name: str | None = None):
         self.frame_a, self.frame_b = frame_a, frame_b
@@ -52,6 +53,7 @@ class RelativePose(Term):
 
     level = "task"
     has_target = True
+    fixed_layout = True
 
     def __init__(self, frame_a: str, frame_b: str, offset, *, name: str | None = None):
         self.frames = (frame_a, frame_b)

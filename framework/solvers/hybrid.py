@@ -176,8 +176,8 @@ class Hybrid(IKSolver):
         first = settings if start == "middle" or not o.restarts else _in_basin(settings)
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
-        loose = not o.global_iterations and problem.priorities and problem.program.loose_hulls \
-            and problem.without_collision_terms is not None
+        loose = problem.checks_collisions and not o.global_iterations and problem.priorities \
+            and problem.program.loose_hulls and problem.without_collision_terms is not None
         if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
             best, check = clear_first(x0, first)
         if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
