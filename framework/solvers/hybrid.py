@@ -11,7 +11,7 @@
    ``global_iterations`` runs the global phase first instead.
    With collision terms whose spheres cover meshes, boxes or cylinders (a loose cover, fatter than the links;
    with priorities), each descent first solves the problem without them (in the warm start's basin, then with
-   restarts); if coal's exact check finds that answer clear (by the terms' margins), it is the answer: the
+   restarts from a drawn start); if coal's exact check finds that answer clear (by the terms' margins), it is the answer: the
    terms' inequalities are inactive there, so it meets the whole problem (and its regularizers are at their
    optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on near misses
    the exact geometry does not have. Otherwise the engine solves the whole problem from the same start. (Where
@@ -157,10 +157,10 @@ class Hybrid(IKSolver):
             clear = hulled.reached and not problem.collisions(hulled.x).colliding  # nested pairs have no rows
             return hulled if clear else result
 
-        def clear_first(x: np.ndarray, settings: LocalSettings):
-            """The problem without its collision terms from ``x``: its answer as the whole problem's, and the
-            check, when coal finds it clear by the terms' margins (the terms' inequalities are inactive there);
-            else ``(None, None)``."""
+        def clear_first(x: np.ndarray | None, settings: LocalSettings):
+            """The problem without its collision terms from ``x`` (``None``: a drawn start): its answer as the whole
+            problem's, and the check, when coal finds it clear by the terms' margins (the terms' inequalities are
+            inactive there); else ``(None, None)``."""
             result = engine(x, settings, problem.without_collision_terms.program)
             if not result.reached:
                 return None, None
@@ -183,7 +183,7 @@ class Hybrid(IKSolver):
         if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
             best = hulls(engine(x0, first))  # to leave it), then random restarts (that basin was searched: the
             if not best.reached and first is not settings and request.time_left() > 0:  # first is drawn too)
-                found, check = clear_first(x0, settings) if loose else (None, None)
+                found, check = clear_first(None, settings) if loose else (None, None)  # drawn, as below
                 best = found if found is not None else better(best, hulls(engine(None)))  # a drawn start
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
