@@ -21,8 +21,8 @@ def scratch_size(bint, params) -> int:
     return size
 
 
-@numba.njit(cache=True)
-def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
+@numba.njit(cache=True, inline="always")
+def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
     """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_ij ‖(p_a + R_a c_ai) − (p_b + R_b c_bj)‖ − r_ai
     − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
     ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame).
@@ -82,48 +82,46 @@ def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S
                       - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
     """:func:`solid_distance` of a world point to the solid at ``params[p:]``, fixed in the world (``fb < 0``) or
-    on frame ``fb``; the gradient ``g`` in the world."""
-    if fb < 0:
-        return solid_distance(x, y, z, params, p, g)
-    v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
-    sd = solid_distance(out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2,
-                        out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2,
-                        out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2, params, p, g)
-    g0, g1, g2 = g[0], g[1], g[2]
-    g[0] = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2
-    g[1] = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
-    g[2] = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
+    on frame ``fb``; the gradient ``g`` in the world. (One call of :func:`solid_distance`: it is inlined.)"""
+    if fb >= 0:  # the point in frame fb
+        v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
+        x = out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2
+        y = out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2
+        z = out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2
+    sd = solid_distance(x, y, z, params, p, g)
+    if fb >= 0:
+        g0, g1, g2 = g[0], g[1], g[2]
+        g[0] = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2
+        g[1] = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
+        g[2] = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
     return sd
 
 
-@numba.njit(cache=True)
-def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
+@numba.njit(cache=True, inline="always")
+def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
     """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
     frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
     sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
     margin, count = params[p + 16], int(params[p + 17])
-    C0, C1, C2 = world_point(out, fa, params, p + 18)
-    gap = _solid_point_distance(out, fb, C0, C1, C2, params, p, g) - params[p + 21] - margin
-    if gap >= 0.0:  # the spheres' bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
-        hinge_row(gap, r, Jr, row, want_jacobian, n)
-        return
-    best, arg = 1e300, -1
-    for k in range(count):
-        q = p + 22 + 4 * k
+    best, arg, w0, w1, w2 = 1e300, -1, 0.0, 0.0, 0.0
+    for k in range(-1, count):  # -1: the spheres' bounding sphere; then each sphere (one call site: inlined)
+        q = p + 18 if k < 0 else p + 22 + 4 * k
         a0, a1, a2 = world_point(out, fa, params, q)
         d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g) - params[q + 3]
-        if d < best:
-            best, arg = d, k
+        if k < 0:
+            if d - margin >= 0.0:  # the bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
+                hinge_row(d - margin, r, Jr, row, want_jacobian, n)
+                return
+        elif d < best:
+            best, arg, w0, w1, w2 = d, k, g[0], g[1], g[2]  # the gradient at the closest sphere's centre
     if not hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
     q = p + 22 + 4 * arg
     a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
     s0, s1, s2 = out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2
-    _solid_point_distance(out, fb, s0, s1, s2, params, p, g)
-    w0, w1, w2 = g[0], g[1], g[2]
     ca0, ca1, ca2 = a1 * w2 - a2 * w1, a2 * w0 - a0 * w2, a0 * w1 - a1 * w0  # o × ∇sd
     for i in range(n):
         Jr[row, i] = (w0 * Jf[fa, 0, i] + w1 * Jf[fa, 1, i] + w2 * Jf[fa, 2, i]
@@ -136,7 +134,7 @@ def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g)
                            + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def solid_distance(x, y, z, params, p, g) -> float:
     """Signed distance [m] of the point ``(x, y, z)`` to the solid of the SOLIDS parameters at
     ``params[p:]`` (negative inside), and its gradient into ``g[:3]`` (world frame).
@@ -180,3 +178,27 @@ def solid_distance(x, y, z, params, p, g) -> float:
     for c in range(3):  # g = R l
         g[c] = params[p + 1 + 3 * c] * l0 + params[p + 2 + 3 * c] * l1 + params[p + 3 + 3 * c] * l2
     return sd
+
+
+@numba.njit(cache=True)
+def spheres_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
+    """:func:`spheres_rows` behind a call (the kernels that evaluate every block kind call it)."""
+    spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S)
+
+
+@numba.njit(cache=True)
+def solids_residual(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
+    """:func:`solids_rows` behind a call (the kernels that evaluate every block kind call it)."""
+    solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g)
+
+
+@numba.njit(cache=True, inline="always")
+def contact_row(kind, out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
+    """The row of a ``SPHERES`` or ``SOLIDS`` block, inlined where contact rows are evaluated most (the engine's
+    linearization, :func:`~.kernels.linearize`): there a call per block cost as much as the test that finds most
+    blocks clear. Only that kernel inlines them (inlined into every kernel that evaluates blocks, through
+    :func:`~.dispatch.block_residual`, they tripled the compile time)."""
+    if kind == SPHERES:
+        spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S)
+    else:
+        solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S)

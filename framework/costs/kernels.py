@@ -13,13 +13,18 @@ import numpy as np
 from ..kinematics import fk_one, frame_jacobians
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .blocks import (
+    FA,
+    FB,
     KIND,
     LEVEL,
     LEVEL_REGULARIZER,
     LEVEL_TASK,
+    PPTR,
     RHO,
     ROWS,
     SCALE,
+    SOLIDS,
+    SPHERES,
     TERM,
     TOL,
     TOL_ANGULAR,
@@ -28,7 +33,7 @@ from .blocks import (
     is_hinge,
     rho_value,
 )
-from .collision_blocks import scratch_size
+from .collision_blocks import contact_row, scratch_size
 from .dispatch import block_residual
 
 # Arguments of compiled calls, as numpy scalars: numba compiles a callee once per *literal* Python int / bool it
@@ -103,7 +108,13 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
             Jr[row : row + bint[b, ROWS], :] = 0.0  # clear at x in the previous call: nothing to recompute
             row += bint[b, ROWS]
             continue
-        row += block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9)
+        kind = bint[b, KIND]
+        if kind == SPHERES or kind == SOLIDS:
+            contact_row(kind, out, Jf, bint[b, FA], bint[b, FB], params, bint[b, PPTR], r, Jr, row, want_jacobian,
+                        x.shape[0], E9)
+            row += bint[b, ROWS]
+        else:
+            row += block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9)
     return row
 
 
