@@ -11,9 +11,9 @@
    ``global_iterations`` runs the global phase first instead.
    With collision terms whose spheres cover meshes, boxes or cylinders (a loose cover, fatter than the links;
    with priorities), each descent first solves the problem without them (in the warm start's basin, then with
-   restarts from a drawn start); if coal's exact check finds that answer clear (by the terms' margins), it is the answer: the
-   terms' inequalities are inactive there, so it meets the whole problem (and its regularizers are at their
-   optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on near misses
+   restarts from a drawn start); if coal's exact check finds that answer clear (by the terms' margins), it is
+   the answer: the terms' inequalities are inactive there, so it meets the whole problem (and its regularizers
+   are at their optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on near misses
    the exact geometry does not have. Otherwise the engine solves the whole problem from the same start. (Where
    every geometry is a sphere of the cover, the engine's own lazy contact rows, :mod:`~framework.engine.reach`,
    are as exact and cheaper.)
