@@ -187,6 +187,13 @@ class Robot:
             self.__dict__.pop("frame_names", None)
         return self._frame_ids[name]
 
+    def body_frame(self, joint_id: int) -> str:
+        """The name of a frame at joint ``joint_id`` itself (its body's frame: collision geometry and sphere centres
+        are given in it), ``body[<joint>]``, added to the model once."""
+        name = f"body[{self.model.names[int(joint_id)]}]"
+        self.add_frame(name, int(joint_id), pin.SE3.Identity())
+        return name
+
     def frame_id(self, frame: str) -> int:
         """Pinocchio index of a frame; raises :class:`UnknownFrameError` naming close matches."""
         try:
@@ -262,23 +269,36 @@ class Robot:
         X = self.check_population(X)
         if self._q_is_x:
             return X[0].copy() if single else X.copy()
+        q_linear, x_linear, m_linear, o_linear, q_angle, x_angle, m_angle, o_angle = self._q_map
         Q = np.empty((X.shape[0], self.model.nq))
+        Q[:, q_linear] = X[:, x_linear] * m_linear + o_linear
+        angles = X[:, x_angle] * m_angle + o_angle
+        Q[:, q_angle], Q[:, q_angle + 1] = np.cos(angles), np.sin(angles)
+        return Q[0] if single else Q
+
+    @cached_property
+    def _q_map(self) -> tuple[np.ndarray, ...]:
+        """``q`` from ``x`` as index arrays: the entries ``q[q_linear] = x[x_linear] * m + o`` (coordinates, mimic
+        joints' multipliers and offsets), and the angles ``θ = x[x_angle] * m + o`` stored as ``q[q_angle] = cos θ``,
+        ``q[q_angle + 1] = sin θ`` (continuous joints, a planar joint's heading, mimics of continuous joints)."""
+        linear: list[tuple[int, int, float, float]] = []
+        angle: list[tuple[int, int, float, float]] = []
         for j in self.joints:
             i, k = j.index, j.idx_q
             if j.kind is JointKind.CONTINUOUS:
-                Q[:, k], Q[:, k + 1] = np.cos(X[:, i]), np.sin(X[:, i])
+                angle.append((k, i, 1.0, 0.0))
             elif j.kind is JointKind.PLANAR:
-                Q[:, k : k + 2] = X[:, i : i + 2]
-                Q[:, k + 2], Q[:, k + 3] = np.cos(X[:, i + 2]), np.sin(X[:, i + 2])
+                linear += [(k, i, 1.0, 0.0), (k + 1, i + 1, 1.0, 0.0)]
+                angle.append((k + 2, i + 2, 1.0, 0.0))
             else:
-                Q[:, k] = X[:, i]
+                linear.append((k, i, 1.0, 0.0))
         for m in self.mimics:
-            value = m.multiplier * X[:, m.index] + m.offset
-            if m.kind is JointKind.CONTINUOUS:
-                Q[:, m.idx_q], Q[:, m.idx_q + 1] = np.cos(value), np.sin(value)
-            else:
-                Q[:, m.idx_q] = value
-        return Q[0] if single else Q
+            (angle if m.kind is JointKind.CONTINUOUS else linear).append((m.idx_q, m.index, m.multiplier, m.offset))
+        out = []
+        for rows in (linear, angle):
+            table = np.array(rows, dtype=float).reshape(-1, 4)
+            out += [table[:, 0].astype(np.int64), table[:, 1].astype(np.int64), table[:, 2], table[:, 3]]
+        return tuple(out)
 
     @cached_property
     def _q_is_x(self) -> bool:
