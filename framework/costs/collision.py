@@ -30,13 +30,6 @@ from .base import Term
 from .program import Block
 
 
-def _body_frame(shape: RobotShape, joint: int) -> str:
-    """A frame on joint ``joint`` at the joint itself (the body's frame; sphere centres are given in it)."""
-    name = f"body[{shape.robot.model.names[int(joint)]}]"
-    shape.robot.add_frame(name, int(joint), pin.SE3.Identity())
-    return name
-
-
 def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3) -> str:
     """A frame at a geometry's placement on its joint (a link's box or capsule), added to the model once."""
     frame = f"geometry[{name}]"
@@ -58,7 +51,7 @@ def _spheres_block(shape: RobotShape, cover: SphereCover, pairs: list[tuple[int,
     mask = np.zeros((len(a), len(b)))
     mask[np.searchsorted(a, [i for i, _ in pairs]), np.searchsorted(b, [j for _, j in pairs])] = 1.0
     full = bool(mask.all())
-    frames = (_body_frame(shape, cover.joints[a[0]]), _body_frame(shape, cover.joints[b[0]]))
+    frames = (shape.robot.body_frame(cover.joints[a[0]]), shape.robot.body_frame(cover.joints[b[0]]))
     params = [[len(a), len(b), margin], bounding_sphere(cover.centers[a], cover.radii[a]),
               bounding_sphere(cover.centers[b], cover.radii[b]), [float(full)],
               np.c_[cover.centers[a], cover.radii[a]].ravel(), np.c_[cover.centers[b], cover.radii[b]].ravel(),
@@ -70,7 +63,7 @@ def _solids_block(shape: RobotShape, cover: SphereCover, spheres: list[int], sol
                   solid_frame: str | None) -> Block:
     """One ``SOLIDS`` block: the cover's ``spheres`` (all on one body) against ``solid`` (16 parameters), fixed in
     the world or on ``solid_frame``."""
-    body = _body_frame(shape, cover.joints[spheres[0]])
+    body = shape.robot.body_frame(cover.joints[spheres[0]])
     frames = (body,) if solid_frame is None else (body, solid_frame)
     params = [solid, [margin, len(spheres)], bounding_sphere(cover.centers[spheres], cover.radii[spheres]),
               np.c_[cover.centers[spheres], cover.radii[spheres]].ravel()]

@@ -1,0 +1,124 @@
+"""The exact check's broad phase: each bounding sphere holds its geometry (sampled surface points and mesh
+vertices), every pair coal finds closer than a margin is among the near pairs (configurations on the boundary of a
+contact, PR2's meshes, the youBot's spheres and box, every obstacle kind), and the broad phase leaves most pairs out."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.broad_phase import bounding_sphere, bounding_spheres
+from framework.spheres import mesh_surface_points, surface_points
+
+PR2_JOINTS = ["torso_lift_joint", "l_shoulder_pan_joint", "l_shoulder_lift_joint", "l_elbow_flex_joint",
+              "r_shoulder_pan_joint", "r_shoulder_lift_joint", "r_elbow_flex_joint"]
+
+
+@pytest.fixture(scope="module")
+def pr2(erd):
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf", joints=PR2_JOINTS)
+    return robot, fw.RobotShape(robot)
+
+
+@pytest.fixture(scope="module")
+def youbot():
+    robot = fw.load_robot("youbot_dual_mobile")
+    return robot, fw.RobotShape(robot)
+
+
+def test_bounding_spheres_hold_their_geometry(pr2, youbot, rng):
+    """Surface points of every PR2 mesh (its vertices included, at the mesh's scale) and of the youBot's spheres
+    and box lie within their geometry's bounding sphere."""
+    import coal
+
+    kinds = set()
+    for _, shape in (pr2, youbot):
+        for g in shape.geometry.geometryObjects:
+            center, radius = bounding_sphere(g.geometry)
+            if isinstance(g.geometry, coal.BVHModelBase):
+                points = mesh_surface_points(g.meshPath, 500, rng, np.asarray(g.meshScale))
+            else:
+                points = surface_points(g.geometry, 500, rng)
+            kinds.add(type(g.geometry).__name__)
+            assert np.linalg.norm(points - center, axis=1).max() <= radius * (1 + 1e-12) + 1e-12, g.name
+    assert {"Sphere", "Box"} <= kinds and any("BVH" in k for k in kinds)
+    for solid in (coal.Cylinder(0.1, 0.6), coal.Capsule(0.05, 0.4)):
+        center, radius = bounding_sphere(solid)
+        assert np.linalg.norm(surface_points(solid, 2000, rng) - center, axis=1).max() <= radius + 1e-12
+    assert bounding_sphere(coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0))[1] == np.inf
+
+
+def _close_pairs(robot, geometry, x, margin) -> set[int]:
+    """The pairs coal's distance computation (every pair) finds closer than ``margin``."""
+    data = geometry.createData()
+    pin.computeDistances(robot.model, robot.model.createData(), geometry, data, robot.to_pinocchio(x))
+    return {k for k, r in enumerate(data.distanceResults) if r.min_distance < margin}
+
+
+def _on_contact_boundaries(robot, clear, rng, count):
+    """Configurations where a pair just touches: bisection between a clear configuration and random ones in
+    contact (``clear(x)``: whether coal finds no contact)."""
+    x0 = robot.middle if clear(robot.middle) else next(x for x in robot.random_configurations(rng, 200) if clear(x))
+    out = []
+    for x1 in robot.random_configurations(rng, 10 * count):
+        if clear(x1):
+            continue
+        a, b = 0.0, 1.0
+        for _ in range(30):
+            t = (a + b) / 2
+            a, b = (t, b) if clear(x0 + t * (x1 - x0)) else (a, t)
+        out.append(x0 + a * (x1 - x0))
+        if len(out) == count:
+            break
+    return out
+
+
+@pytest.mark.parametrize("which", ["pr2", "youbot"])
+def test_near_pairs_hold_every_pair_closer_than_the_margin(which, pr2, youbot, rng):
+    robot, shape = pr2 if which == "pr2" else youbot
+    spheres = bounding_spheres(robot, shape.geometry)
+    configurations = _on_contact_boundaries(robot, lambda x: not shape.check(x).colliding, rng, 8)
+    configurations += list(robot.random_configurations(rng, 8))
+    checked = 0
+    for x in configurations:
+        for margin in (0.0, 0.02):
+            close = _close_pairs(robot, shape.geometry, x, margin)
+            near = set(spheres.near_pairs(x, margin).tolist())
+            assert close <= near, sorted(close - near)
+            checked += len(close)
+    assert checked > 0  # contacts were there to miss
+
+
+def test_near_pairs_against_every_obstacle_kind(youbot, rng, tmp_path):
+    """The scene's model (the robot's moving geometries against a box, sphere, capsule, half-space and mesh): every
+    pair coal finds within the margin is near, and the fast check reports what the distances on every pair do."""
+    import trimesh
+
+    path = tmp_path / "block.stl"
+    trimesh.creation.box(extents=[0.3, 0.2, 0.2]).export(path)
+    robot, shape = youbot
+    scene = fw.Scene((fw.Box([0.6, 0.0, 0.3], [0.4, 0.6, 0.05], name="table"), fw.Sphere([0.3, 0.4, 0.5], 0.1),
+                      fw.Capsule([0.0, -0.5, 0.4], 0.05, 0.4), fw.Plane([0, 0, 0.02], [0, 0, 1]),
+                      fw.Mesh(path, center=[0.2, 0.0, 0.7])))
+    geometry, _ = shape._with_scene(scene)
+    spheres = bounding_spheres(robot, geometry)
+    assert spheres.radii.max() > 100  # the plane: a large box under the robot, near every body
+    clear = lambda x: not shape.check(x, scene=scene, self_pairs=False).colliding  # noqa: E731
+    configurations = _on_contact_boundaries(robot, clear, rng, 8) + list(robot.random_configurations(rng, 4))
+    for x in configurations:
+        for margin in (0.0, 0.03):
+            close = _close_pairs(robot, geometry, x, margin)
+            assert close <= set(spheres.near_pairs(x, margin).tolist())
+            fast = shape.check(x, margin, scene=scene, self_pairs=False, distances=False)
+            full = shape.check(x, margin, scene=scene, self_pairs=False)
+            assert {(c.a, c.b) for c in fast.contacts} == {(c.a, c.b) for c in full.contacts}
+
+
+def test_the_broad_phase_leaves_most_pairs_out(pr2, youbot):
+    """At the middle of the box (arms apart) few pairs are near: a broad phase keeping every pair (the trivial
+    one) would be as correct and save nothing."""
+    for robot, shape in (pr2, youbot):
+        near = bounding_spheres(robot, shape.geometry).near_pairs(robot.middle, 0.0)
+        assert near.size < 0.25 * len(shape.pairs), (robot.name, near.size, len(shape.pairs))
