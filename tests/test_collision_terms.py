@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 from pathlib import Path
 
 import numpy as np
@@ -64,6 +66,24 @@ def test_sphere_obstacles_are_kept_clear(sphere_arm):
         fw.SelfCollision(shape, margin=-1.0, cover=exact)
 
 
+def test_collision_blocks_are_built_once_per_shape_cover_scene_and_margin(sphere_arm):
+    """A tracking task makes its terms anew at every waypoint: their blocks come from the shape, built once for each
+    cover, margin (and scene), and the same as a first build's."""
+    robot, shape, exact = sphere_arm
+    first = fw.SelfCollision(shape, margin=0.01, cover=exact).blocks(robot)
+    assert fw.SelfCollision(shape, margin=0.01, cover=exact).blocks(robot) is first
+    other = fw.SelfCollision(shape, margin=0.02, cover=exact).blocks(robot)
+    assert not all(np.array_equal(a.params, b.params) for a, b in zip(other, first))  # the margin is a parameter
+    fresh = fw.SelfCollision(fw.RobotShape(robot), margin=0.01, cover=exact).blocks(robot)  # another shape: built anew
+    assert [b.signature() for b in fresh] == [b.signature() for b in first]
+    assert all(np.array_equal(a.params, b.params) for a, b in zip(fresh, first))
+    scene = fw.Scene((fw.Sphere([0.0, L, 0.0], 0.05),))
+    blocks = fw.Obstacles(shape, scene, margin=0.01, cover=exact).blocks(robot)
+    assert fw.Obstacles(shape, scene, margin=0.01, cover=exact).blocks(robot) is blocks
+    moved = fw.Obstacles(shape, [fw.Sphere([0.0, -L, 0.0], 0.05)], margin=0.01, cover=exact).blocks(robot)
+    assert not np.array_equal(moved[0].params, blocks[0].params)  # another scene: its own blocks
+
+
 def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):
     """PR2's shoulder pans never meet (coal: apart in every sampled configuration) but their sphere covers overlap
     in every one: a sphere row for them would make every problem infeasible. SelfCollision leaves that pair (and
@@ -92,8 +112,10 @@ def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):
     bodies = {b.frames for b in blocks}
     assert ("body[l_shoulder_pan_joint]", "body[r_shoulder_pan_joint]") not in bodies
     assert ("body[l_forearm_roll_joint]", "body[r_forearm_roll_joint]") in bodies  # the arms still kept apart
-    with pytest.warns(UserWarning):
-        rows = fw.Problem(robot, term).program  # the term's rows alone
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # said once: the shape builds the blocks of a cover and margin once
+        rows = fw.Problem(robot, fw.SelfCollision(shape)).program  # the term's rows alone
+    assert fw.SelfCollision(shape).blocks(robot) is blocks
     x = robot.random_configurations(rng, 1)[0]
     while shape.check(x, distances=False).colliding or residuals(rows, x)[0].min() < 0:
         x = robot.random_configurations(rng, 1)[0]  # a target whose configuration the sphere model calls clear

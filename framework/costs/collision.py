@@ -119,7 +119,12 @@ class SelfCollision(Term):
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
         other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
-        its frame)."""
+        its frame). Built once per shape, cover and margin (a tracking task makes its terms anew at every
+        waypoint)."""
+        key = ("self-collision blocks", id(self.cover), self.margin)  # the entry holds the cover: its id stays its
+        return self.shape.memo(key, lambda: (self.cover, self._build()))[1]
+
+    def _build(self) -> tuple[Block, ...]:
         solids = self.shape.solids()
         inseparable = self.shape.inseparable(self.cover)
         if inseparable:
@@ -200,7 +205,18 @@ class Obstacles(Term):
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are
-        solids too)."""
+        solids too). Built once per shape, cover, scene and margin, for the last few scenes (a tracking task makes
+        its terms anew at every waypoint, on one scene)."""
+        built = self.shape.memo(("obstacle blocks",), dict)
+        key = (id(self.cover), id(self.scene), self.margin)  # the entries hold the cover and scene: their ids stay
+        entry = built.get(key)
+        if entry is None:
+            if len(built) >= 8:
+                built.clear()
+            entry = built[key] = (self.cover, self.scene, self._build())
+        return entry[2]
+
+    def _build(self) -> tuple[Block, ...]:
         bodies: dict[int, list[int]] = {}
         for k, joint in enumerate(self.cover.joints):
             if joint != 0:  # fixed to the world: where the user placed it
