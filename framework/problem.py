@@ -157,8 +157,8 @@ class Problem:
         if not self.checks_collisions:
             return None
         x = self.robot.check_population(x)[0]
-        return merge_reports([t.collisions(self.robot, x, margin=margins) for _, t in self.objective
-                              if t.checks_collisions])
+        reports = [t.collisions(self.robot, x, margin=margins) for _, t in self.objective if t.checks_collisions]
+        return reports[0] if len(reports) == 1 else merge_reports(reports)  # one report: merged, it is itself
 
     @cached_property
     def without_collision_terms(self) -> Problem | None:
