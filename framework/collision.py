@@ -279,10 +279,10 @@ class RobotShape:
         distance exactly 0 (coal's distance between intersecting meshes, which has no depth).
 
         ``distances=False`` is the fast check: coal's collision test (with ``margin`` as its security margin:
-        pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, on the pairs whose
-        bounding spheres come within the margin (the others cannot: :mod:`framework.broad_phase`) — and distances only
-        for the pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then the closest flagged
-        pair's, or NaN (not measured) when there is none.
+        pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, on the pairs
+        whose bounding spheres come within the margin (the others cannot: :mod:`framework.broad_phase`) — and
+        distances only for the pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then
+        the closest flagged pair's, or NaN (not measured) when there is none.
         """
         if not (np.isfinite(margin) and margin >= 0.0):
             raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
@@ -306,7 +306,8 @@ class RobotShape:
                     flagged = [k for k in near if pin.computeCollision(geometry, data, k)]
                 else:
                     any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
-                    flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] if any_contact else []
+                    flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] \
+                        if any_contact else []
                 found = [(k, float(pin.computeDistance(geometry, data, k).min_distance)) for k in flagged]
             for k, d in found:
                 smallest = min(smallest, d)

@@ -1,6 +1,7 @@
 """The exact check's broad phase: each bounding sphere holds its geometry (sampled surface points and mesh
 vertices), every pair coal finds closer than a margin is among the near pairs (configurations on the boundary of a
-contact, PR2's meshes, the youBot's spheres and box, every obstacle kind), and the broad phase leaves most pairs out."""
+contact, PR2's meshes, the youBot's spheres and box, every obstacle kind), and the broad phase leaves most pairs
+out."""
 
 from __future__ import annotations
 

@@ -13,10 +13,10 @@
    with priorities), each descent first solves the problem without them (in the warm start's basin, then with
    restarts from a drawn start); if coal's exact check finds that answer clear (by the terms' margins), it is
    the answer: the terms' inequalities are inactive there, so it meets the whole problem (and its regularizers
-   are at their optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on near misses
-   the exact geometry does not have. Otherwise the engine solves the whole problem from the same start. (Where
-   every geometry is a sphere of the cover, the engine's own lazy contact rows, :mod:`~framework.engine.reach`,
-   are as exact and cheaper.)
+   are at their optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on
+   near misses the exact geometry does not have. Otherwise the engine solves the whole problem from the same
+   start. (Where every geometry is a sphere of the cover, the engine's own lazy contact rows,
+   :mod:`~framework.engine.reach`, are as exact and cheaper.)
    Whenever the engine ends short of the task with a collision term's sphere rows active, its last steps are
    taken again on the links' convex hulls (:func:`framework.engine.hull_reach.hull_reach`): the spheres are
    fatter than the links, the hulls hold them tightly, and the exact check decides success anyway.
