@@ -6,10 +6,16 @@ their geometry exactly (a sphere is its own; any other shape sits inside the sph
 local axis-aligned box, coal's ``aabb_center`` / ``aabb_radius``; an unbounded one, a half-space, gets an infinite
 radius), so the pairs left out are clear: the check's answer is the one coal gives on every pair, at a fraction of
 the cost (a dual-arm youBot: 906 pairs, about 16 near at a solved configuration).
+
+A geometry whose exact shape is a solid of :mod:`framework.solids` (an obstacle's sphere, box, capsule or
+half-space; a link's box, or the capsule holding its cylinder) is measured as that solid against the other's sphere:
+its signed distance to the sphere's centre, less the radius, is a lower bound of the pair's distance too, and a
+tight one where the bounding sphere is not (a table's sphere holds the room above it; a floor's is infinite).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numba
@@ -18,6 +24,7 @@ import pinocchio as pin
 
 from .kinematics import PopulationKinematics
 from .robot import Robot
+from .solids import ROW, solid_distance
 
 #: Added to every margin [m]: pairs within this of their spheres touching go to coal too (coal's own tolerance on
 #: distances between primitives is about 1e-6 m).
@@ -47,6 +54,8 @@ class BoundingSpheres:
         slots: ``(g,)`` each geometry's body, as an index into ``kinematics.frames`` (``-1``: fixed in the world).
         centers: ``(g, 3)`` sphere centres in their body's frame (the world's for slot ``-1``) [m].
         radii: ``(g,)`` radii [m] (``inf``: unbounded).
+        codes: ``(g,)`` the solid code of a geometry whose exact shape is a solid (``-1``: none).
+        solids: ``(g * 16,)`` those solids' rows (:mod:`framework.solids`) in their body's frame, one after another.
         first, second: ``(pairs,)`` the geometry indices of each collision pair.
     """
 
@@ -54,6 +63,8 @@ class BoundingSpheres:
     slots: np.ndarray
     centers: np.ndarray
     radii: np.ndarray
+    codes: np.ndarray
+    solids: np.ndarray
     first: np.ndarray
     second: np.ndarray
 
@@ -66,15 +77,21 @@ class BoundingSpheres:
             poses = self.kinematics(np.ascontiguousarray(x, dtype=float)[None])
             positions, rotations = poses.positions[0], poses.rotations[0]
         out = np.empty(self.first.size, dtype=np.int64)
-        count = _near_pairs(positions, rotations, self.slots, self.centers, self.radii, self.first, self.second,
-                            float(margin) + SLACK, out)
+        count = _near_pairs(positions, rotations, self.slots, self.centers, self.radii, self.codes, self.solids,
+                            self.first, self.second, float(margin) + SLACK, out)
         return out[:count]
 
 
-def bounding_spheres(robot: Robot, geometry: pin.GeometryModel) -> BoundingSpheres:
+def bounding_spheres(robot: Robot, geometry: pin.GeometryModel,
+                     solids: Mapping[int, np.ndarray] | None = None) -> BoundingSpheres:
     """The :class:`BoundingSpheres` of ``geometry`` (a geometry model of ``robot``'s model; the bodies' frames are
-    added to the model, :meth:`~framework.robot.Robot.body_frame`)."""
+    added to the model, :meth:`~framework.robot.Robot.body_frame`); ``solids``: geometry index -> the row
+    ``(16,)`` of the solid that is (or holds) its exact shape, in its body's frame (the world's for a geometry
+    fixed there)."""
     objects = geometry.geometryObjects
+    codes, rows = np.full(len(objects), -1, dtype=np.int64), np.zeros((len(objects), ROW))
+    for k, row in (solids or {}).items():
+        codes[k], rows[k] = int(row[0]), row
     bodies = sorted({int(g.parentJoint) for g in objects if g.parentJoint != 0})
     slot = {joint: k for k, joint in enumerate(bodies)}
     centers, radii = np.empty((len(objects), 3)), np.empty(len(objects))
@@ -84,14 +101,16 @@ def bounding_spheres(robot: Robot, geometry: pin.GeometryModel) -> BoundingSpher
     slots = np.array([slot.get(int(g.parentJoint), -1) for g in objects], dtype=np.int64)
     kinematics = robot.kinematics(tuple(robot.body_frame(j) for j in bodies)) if bodies else None
     pairs = geometry.collisionPairs
-    return BoundingSpheres(kinematics, slots, centers, radii, np.array([p.first for p in pairs], dtype=np.int64),
+    return BoundingSpheres(kinematics, slots, centers, radii, codes, rows.ravel(),
+                           np.array([p.first for p in pairs], dtype=np.int64),
                            np.array([p.second for p in pairs], dtype=np.int64))
 
 
 @numba.njit(cache=True)
-def _near_pairs(positions, rotations, slots, centers, radii, first, second, margin, out) -> int:
-    """The pairs ``(first[p], second[p])`` whose spheres are closer than ``margin``, into ``out``; returns their
-    count. ``positions (k, 3)``, ``rotations (k, 3, 3)``: the bodies' world poses."""
+def _near_pairs(positions, rotations, slots, centers, radii, codes, solids, first, second, margin, out) -> int:
+    """The pairs ``(first[p], second[p])`` that can be closer than ``margin``, into ``out``; returns their count:
+    those whose spheres are, unless a solid of the pair is clear of the other's sphere by ``margin``.
+    ``positions (k, 3)``, ``rotations (k, 3, 3)``: the bodies' world poses."""
     world = np.empty((centers.shape[0], 3))
     for g in range(centers.shape[0]):
         s = slots[g]
@@ -101,6 +120,7 @@ def _near_pairs(positions, rotations, slots, centers, radii, first, second, marg
             else:
                 world[g, i] = positions[s, i] + rotations[s, i, 0] * centers[g, 0] \
                     + rotations[s, i, 1] * centers[g, 1] + rotations[s, i, 2] * centers[g, 2]
+    gradient = np.empty(3)
     count = 0
     for p in range(first.shape[0]):
         a, b = first[p], second[p]
@@ -108,7 +128,28 @@ def _near_pairs(positions, rotations, slots, centers, radii, first, second, marg
         d2 = 0.0
         for i in range(3):
             d2 += (world[a, i] - world[b, i]) ** 2
-        if not d2 >= reach * reach:  # inf radii: always near
-            out[count] = p
-            count += 1
+        if d2 >= reach * reach:  # inf radii: never clear this way
+            continue
+        if codes[b] >= 0 and _solid_gap(b, world[a], slots, positions, rotations, solids, gradient) - radii[a] \
+                >= margin:
+            continue
+        if codes[a] >= 0 and _solid_gap(a, world[b], slots, positions, rotations, solids, gradient) - radii[b] \
+                >= margin:
+            continue
+        out[count] = p
+        count += 1
     return count
+
+
+@numba.njit(cache=True)
+def _solid_gap(g, point, slots, positions, rotations, solids, gradient) -> float:
+    """Signed distance [m] of the world ``point`` ``(3,)`` to geometry ``g``'s solid (its row in its body's
+    frame)."""
+    x, y, z = point[0], point[1], point[2]
+    s = slots[g]
+    if s >= 0:  # the point in the body's frame: Rᵀ(point − p)
+        v0, v1, v2 = x - positions[s, 0], y - positions[s, 1], z - positions[s, 2]
+        x = rotations[s, 0, 0] * v0 + rotations[s, 1, 0] * v1 + rotations[s, 2, 0] * v2
+        y = rotations[s, 0, 1] * v0 + rotations[s, 1, 1] * v1 + rotations[s, 2, 1] * v2
+        z = rotations[s, 0, 2] * v0 + rotations[s, 1, 2] * v1 + rotations[s, 2, 2] * v2
+    return solid_distance(x, y, z, solids, ROW * g, gradient)

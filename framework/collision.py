@@ -30,15 +30,17 @@ from .broad_phase import BoundingSpheres, bounding_spheres
 from .errors import RobotFileError, TaskError
 from .robot import Robot
 from .scene import Scene
+from .solids import solid_row
 from .spheres import SphereCover, sphere_cover
 
 #: Penetrations shallower than this [m] are touching, not collisions: coal's GJK / EPA resolve distances between
 #: primitives to about 1e-6 m, so a configuration on a collision term's boundary reads as slightly inside.
 TOUCH = 1e-5
 #: Pairs from which the fast check first asks the broad phase which pairs are near (:mod:`framework.broad_phase`):
-#: below it, coal's pass over every pair (one call into C++) costs less than the broad phase's calls (PR2 against a
-#: table, 40 pairs: 55 µs without it, 85 µs with it; PR2's own 239 pairs: 101 -> 84 µs; the dual youBot's 906 pairs:
-#: 122 -> 33 µs).
+#: below it, coal's pass over every pair (one call into C++) costs less than the broad phase's calls (PR2's own 239
+#: pairs: 101 -> 84 µs; the dual youBot's 906 pairs: 122 -> 33 µs). Against a scene with a sphere, box, capsule or
+#: half-space the broad phase is asked whatever the count: it measures those solids exactly, and few pairs are near
+#: (PR2 over a table, 31 pairs: 22 near by bounding spheres, 0.4 by the table's box; the check 55 -> 47 µs).
 BROAD_PHASE_PAIRS = 100
 
 
@@ -113,7 +115,7 @@ class RobotShape:
         self._hulls: dict[int, object] = {}
         self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
-        self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData] | None = None
+        self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]] | None = None
         self._broad: dict[int, tuple[pin.GeometryModel, BoundingSpheres]] = {}
 
     def _remove_always_colliding(self, samples: int) -> None:
@@ -179,10 +181,10 @@ class RobotShape:
     def solids(self) -> dict[str, tuple[int, pin.SE3, np.ndarray, float]]:
         """Geometry name -> ``(joint, placement in the joint, solid parameters (16,), volume [m³])`` of every box,
         capsule and cylinder (a cylinder as the capsule holding it): the kernel's signed distance to them is exact
-        (see :func:`framework.costs.collision_blocks.solid_distance`), so they need no sphere cover on one side of a pair."""
+        (see :func:`framework.solids.solid_distance`), so they need no sphere cover on one side of a pair."""
         import coal
 
-        from .scene import BOX, CAPSULE
+        from .solids import BOX, CAPSULE
 
         out = {}
         for g in self.geometry.geometryObjects:
@@ -240,30 +242,40 @@ class RobotShape:
             self._margined[key] = entry
         return entry[1]
 
-    def _bounding_spheres(self, geometry: pin.GeometryModel) -> BoundingSpheres:
-        """The broad phase of ``geometry`` (the robot's own model, or one with a scene), made once per model."""
+    def _bounding_spheres(self, geometry: pin.GeometryModel,
+                          obstacles: dict[int, np.ndarray] | None = None) -> BoundingSpheres:
+        """The broad phase of ``geometry`` (the robot's own model, or one with a scene whose exact obstacles'
+        solid rows are ``obstacles``, by geometry index), made once per model. Links' boxes and cylinders are
+        measured as their solids (:meth:`solids`)."""
         entry = self._broad.get(id(geometry))
         if entry is None or entry[0] is not geometry:
             if len(self._broad) > 16:
                 self._broad.clear()
-            entry = self._broad[id(geometry)] = (geometry, bounding_spheres(self.robot, geometry))
+            links = {name: solid_row(int(row[0]), placement.rotation, placement.translation, row[13:16])
+                     for name, (_, placement, row, _) in self.solids().items()}  # in the body's frame
+            solids = {k: links[g.name] for k, g in enumerate(geometry.geometryObjects) if g.name in links}
+            entry = self._broad[id(geometry)] = (geometry, bounding_spheres(self.robot, geometry,
+                                                                            {**solids, **(obstacles or {})}))
         return entry[1]
 
-    def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData]:
+    def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]]:
         """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the
-        last scene asked."""
+        last scene asked; and the solid rows of the obstacles whose exact shape is one, by geometry index."""
         if self._scene is not None and self._scene[0] is scene:
-            return self._scene[1], self._scene[2]
+            return self._scene[1:]
         geometry = self.geometry.copy()
         geometry.removeAllCollisionPairs()
         robot_geometries = [i for i, g in enumerate(geometry.geometryObjects) if g.parentJoint != 0]
+        solids = {}
         for obstacle in scene:
             shape, placement = obstacle.coal()
             k = geometry.addGeometryObject(pin.GeometryObject(f"obstacle:{obstacle.name}", 0, 0, placement, shape))
             for i in robot_geometries:
                 geometry.addCollisionPair(pin.CollisionPair(i, k))
-        self._scene = (scene, geometry, geometry.createData())
-        return self._scene[1], self._scene[2]
+            if obstacle.exact:
+                solids[k] = obstacle.solids()[0]
+        self._scene = (scene, geometry, geometry.createData(), solids)
+        return self._scene[1:]
 
     @property
     def pairs(self) -> tuple[tuple[str, str], ...]:
@@ -279,8 +291,9 @@ class RobotShape:
         distance exactly 0 (coal's distance between intersecting meshes, which has no depth).
 
         ``distances=False`` is the fast check: coal's collision test (with ``margin`` as its security margin:
-        pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, on the pairs
-        whose bounding spheres come within the margin (the others cannot: :mod:`framework.broad_phase`) — and
+        pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, or against a
+        scene's solids, on the pairs whose bounding spheres (or solids) come within the margin (the others cannot:
+        :mod:`framework.broad_phase`) — and
         distances only for the pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then
         the closest flagged pair's, or NaN (not measured) when there is none.
         """
@@ -288,19 +301,19 @@ class RobotShape:
             raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
         x = np.asarray(x, dtype=float)
         q = self.robot.to_pinocchio(x)
-        models = [(self.geometry, self._geometry_data)] if self_pairs else []
+        models = [(self.geometry, self._geometry_data, None)] if self_pairs else []
         if scene is not None:
             models.append(self._with_scene(scene))
         contacts, smallest = [], np.inf
-        for geometry, data in models:
+        for geometry, data, obstacles in models:
             objects, pairs = geometry.geometryObjects, geometry.collisionPairs
             if distances:
                 pin.computeDistances(self.robot.model, self._data, geometry, data, q)
                 found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
             else:
                 data = self._margin_data(geometry, data, margin)
-                if len(pairs) >= BROAD_PHASE_PAIRS:
-                    near = self._bounding_spheres(geometry).near_pairs(x, margin).tolist()
+                if len(pairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
+                    near = self._bounding_spheres(geometry, obstacles).near_pairs(x, margin).tolist()
                     if near:
                         pin.updateGeometryPlacements(self.robot.model, self._data, geometry, data, q)
                     flagged = [k for k in near if pin.computeCollision(geometry, data, k)]

@@ -1,7 +1,7 @@
 """Obstacles in the robot's world: spheres, boxes, capsules, half-spaces (a floor, a wall) and meshes.
 
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
-for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.costs.collision_blocks.solid_distance`),
+for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.solids.solid_distance`),
 the exact check builds coal geometry from it (:meth:`framework.collision.RobotShape.check` with ``scene=``),
 recordings and meshcat draw it (each obstacle's ``rerun`` / ``meshcat`` method), M-FABRIK plans its base around
 their shadows on the floor (``footprint``, :meth:`framework.fabrik.Environment.from_scene`), and task files give
@@ -20,18 +20,17 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import pinocchio as pin
 
 from .errors import TaskError
 from .rotations import rotation_target
+from .solids import BOX, CAPSULE, HALFSPACE, SPHERE, solid_row
 from .spheres import fit_spheres, mesh_surface_points
 from .validate import check_table
 
-#: Solid codes of the compiled kernel (:mod:`framework.costs.blocks`: ``SOLID_*``).
-SPHERE, BOX, CAPSULE, HALFSPACE = range(4)
 #: Extent of a half-space's stand-in box for the exact check [m]: wide and deep beside any robot.
 HALFSPACE_EXTENT = 200.0
 
@@ -85,11 +84,6 @@ def _xyzw(rr, rotation: np.ndarray):
     return rr.Quaternion(xyzw=pin.Quaternion(np.asarray(rotation)).coeffs())
 
 
-def _solid_row(solid: int, rotation: np.ndarray, center: np.ndarray, dims: Sequence[float]) -> np.ndarray:
-    """One solid's kernel parameters ``(16,)``: code, R (row-major), c, dims (the ``lo`` column is the term's)."""
-    return np.concatenate([[float(solid)], rotation.ravel(), center, np.asarray(dims, dtype=float)])
-
-
 @dataclass(frozen=True)
 class Sphere:
     """A ball of ``radius`` [m] at ``center`` (3,) [m]."""
@@ -97,6 +91,8 @@ class Sphere:
     center: np.ndarray
     radius: float
     name: str = "sphere"
+    #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
+    exact: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", _vector(self.center, 3, f"{self.name} center"))
@@ -104,7 +100,7 @@ class Sphere:
 
     def solids(self) -> np.ndarray:
         """Kernel parameters ``(1, 16)``."""
-        return _solid_row(SPHERE, np.eye(3), self.center, (self.radius, 0.0, 0.0))[None]
+        return solid_row(SPHERE, np.eye(3), self.center, (self.radius, 0.0, 0.0))[None]
 
     def rerun(self, rr, color) -> list[tuple[str, Any]]:
         """``(sub-entity, rerun archetype)`` pairs that draw it."""
@@ -134,6 +130,8 @@ class Box:
     size: np.ndarray
     rotation: np.ndarray | None = None
     name: str = "box"
+    #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
+    exact: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", _vector(self.center, 3, f"{self.name} center"))
@@ -144,7 +142,7 @@ class Box:
         object.__setattr__(self, "rotation", _rotation(self.rotation, f"{self.name} rotation"))
 
     def solids(self) -> np.ndarray:
-        return _solid_row(BOX, self.rotation, self.center, self.size / 2)[None]
+        return solid_row(BOX, self.rotation, self.center, self.size / 2)[None]
 
     def rerun(self, rr, color) -> list[tuple[str, Any]]:
         return [("", rr.Boxes3D(centers=[self.center], half_sizes=[self.size / 2], quaternions=[_xyzw(rr, self.rotation)],
@@ -173,6 +171,8 @@ class Capsule:
     length: float
     rotation: np.ndarray | None = None
     name: str = "capsule"
+    #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
+    exact: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "center", _vector(self.center, 3, f"{self.name} center"))
@@ -181,7 +181,7 @@ class Capsule:
         object.__setattr__(self, "rotation", _rotation(self.rotation, f"{self.name} rotation"))
 
     def solids(self) -> np.ndarray:
-        return _solid_row(CAPSULE, self.rotation, self.center, (self.radius, self.length / 2, 0.0))[None]
+        return solid_row(CAPSULE, self.rotation, self.center, (self.radius, self.length / 2, 0.0))[None]
 
     def rerun(self, rr, color) -> list[tuple[str, Any]]:
         end = self.center - self.rotation[:, 2] * self.length / 2  # rerun places a capsule by one end
@@ -214,6 +214,8 @@ class Plane:
     point: np.ndarray
     normal: np.ndarray
     name: str = "plane"
+    #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
+    exact: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "point", _vector(self.point, 3, f"{self.name} point"))
@@ -228,7 +230,7 @@ class Plane:
         return pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), self.normal).toRotationMatrix()
 
     def solids(self) -> np.ndarray:
-        return _solid_row(HALFSPACE, self.rotation, self.point, (0.0, 0.0, 0.0))[None]
+        return solid_row(HALFSPACE, self.rotation, self.point, (0.0, 0.0, 0.0))[None]
 
     def rerun(self, rr, color) -> list[tuple[str, Any]]:
         """A 2 m square slab 1 mm thick whose top face is the plane, around its point."""
@@ -267,6 +269,8 @@ class Mesh:
     scale: np.ndarray = field(default_factory=lambda: np.ones(3))
     spheres: int = 16
     name: str = "mesh"
+    #: Its rows of :meth:`solids` cover its surface: not its exact shape.
+    exact: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         if not Path(self.path).is_file():
@@ -289,7 +293,7 @@ class Mesh:
 
     def solids(self) -> np.ndarray:
         centers, radii = self.cover()
-        return np.array([_solid_row(SPHERE, np.eye(3), c, (r, 0.0, 0.0)) for c, r in zip(centers, radii)])
+        return np.array([solid_row(SPHERE, np.eye(3), c, (r, 0.0, 0.0)) for c, r in zip(centers, radii)])
 
     def rerun(self, rr, color) -> list[tuple[str, Any]]:
         import trimesh

@@ -79,7 +79,7 @@ def _on_contact_boundaries(robot, clear, rng, count):
 @pytest.mark.parametrize("which", ["pr2", "youbot"])
 def test_near_pairs_hold_every_pair_closer_than_the_margin(which, pr2, youbot, rng):
     robot, shape = pr2 if which == "pr2" else youbot
-    spheres = bounding_spheres(robot, shape.geometry)
+    spheres = shape._bounding_spheres(shape.geometry)  # links' boxes and cylinders measured as solids
     configurations = _on_contact_boundaries(robot, lambda x: not shape.check(x).colliding, rng, 8)
     configurations += list(robot.random_configurations(rng, 8))
     checked = 0
@@ -103,18 +103,24 @@ def test_near_pairs_against_every_obstacle_kind(youbot, rng, tmp_path):
     scene = fw.Scene((fw.Box([0.6, 0.0, 0.3], [0.4, 0.6, 0.05], name="table"), fw.Sphere([0.3, 0.4, 0.5], 0.1),
                       fw.Capsule([0.0, -0.5, 0.4], 0.05, 0.4), fw.Plane([0, 0, 0.02], [0, 0, 1]),
                       fw.Mesh(path, center=[0.2, 0.0, 0.7])))
-    geometry, _ = shape._with_scene(scene)
-    spheres = bounding_spheres(robot, geometry)
-    assert spheres.radii.max() > 100  # the plane: a large box under the robot, near every body
+    geometry, _, obstacles = shape._with_scene(scene)
+    assert len(obstacles) == 4  # the mesh is no solid: its bounding sphere
+    spheres = shape._bounding_spheres(geometry, obstacles)
+    assert spheres.radii.max() > 100  # the plane: a large box under the robot, whose sphere is near every body
+    only_spheres = bounding_spheres(robot, geometry)
+    fewer = 0
     clear = lambda x: not shape.check(x, scene=scene, self_pairs=False).colliding  # noqa: E731
     configurations = _on_contact_boundaries(robot, clear, rng, 8) + list(robot.random_configurations(rng, 4))
     for x in configurations:
         for margin in (0.0, 0.03):
             close = _close_pairs(robot, geometry, x, margin)
-            assert close <= set(spheres.near_pairs(x, margin).tolist())
+            near = set(spheres.near_pairs(x, margin).tolist())
+            assert close <= near, sorted(close - near)
+            fewer += len(near) < only_spheres.near_pairs(x, margin).size
             fast = shape.check(x, margin, scene=scene, self_pairs=False, distances=False)
             full = shape.check(x, margin, scene=scene, self_pairs=False)
             assert {(c.a, c.b) for c in fast.contacts} == {(c.a, c.b) for c in full.contacts}
+    assert fewer == 2 * len(configurations)  # the solids prune what the spheres keep (the plane's pairs, at least)
 
 
 def test_the_broad_phase_leaves_most_pairs_out(pr2, youbot):

@@ -12,7 +12,7 @@ import pytest
 
 import framework as fw
 from framework.costs import Program
-from framework.costs.collision_blocks import solid_distance
+from framework.solids import solid_distance
 from framework.engine import residuals
 from framework.errors import TaskError
 from framework.spheres import SphereCover

@@ -43,7 +43,7 @@ Parameters: ``n_a, n_b, m``, each body's bounding sphere (centre in its frame, r
 pair of the two lists, 0: a 0/1 mask of the pairs follows the spheres), ``a``'s spheres and ``b``'s (centre,
 radius: 4 each), the mask (``n_a × n_b``, row-major).
 ``SOLIDS``: the spheres of frame ``a``'s body against one solid — a sphere, box, capsule or half-space
-(:data:`SOLID_SPHERE`, ...: a code, a rotation ``R`` and centre ``c``, dims; see :func:`~.collision_blocks.solid_distance`) fixed in
+(a row of :mod:`framework.solids`: a code, a rotation ``R`` and centre ``c``, dims) fixed in
 the world, or on frame ``b`` (a link's own box) — by the closest sphere. Parameters: the solid (16), ``m``, the
 count, the spheres' bounding sphere (4), the spheres (4 each).
 Both keep a collision term to one row per pair of bodies (or body and obstacle) however many spheres cover them.
@@ -65,8 +65,6 @@ import numpy as np
 # Block kinds
 (POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
  LOOK_AT, COM, SPHERES, SOLIDS) = range(14)
-# Solids of a SOLIDS block (its first parameter)
-SOLID_SPHERE, SOLID_BOX, SOLID_CAPSULE, SOLID_HALFSPACE = range(4)
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
 # Tolerance classes: which tolerance a task block's error ‖r‖ is held to

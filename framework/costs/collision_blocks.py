@@ -1,13 +1,14 @@
 """Compiled residuals of the collision kinds (see :mod:`~.blocks`): ``SPHERES`` (two bodies' sphere covers, the
 closest pair, pruned by bounding spheres) and ``SOLIDS`` (one body's spheres against a sphere, box, capsule or
-half-space), with the signed distance to those solids and the scratch the sphere pairs need."""
+half-space: :func:`framework.solids.solid_distance`), and the scratch the sphere pairs need."""
 
 from __future__ import annotations
 
 import numba
 import numpy as np
 
-from .blocks import KIND, PPTR, SOLID_BOX, SOLID_CAPSULE, SOLID_HALFSPACE, SPHERES, hinge_row, on_frame, world_point
+from ..solids import solid_distance
+from .blocks import KIND, PPTR, SPHERES, hinge_row, on_frame, world_point
 
 
 @numba.njit(cache=True)
@@ -132,52 +133,6 @@ def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> 
         for i in range(n):
             Jr[row, i] -= (w0 * Jf[fb, 0, i] + w1 * Jf[fb, 1, i] + w2 * Jf[fb, 2, i]
                            + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
-
-
-@numba.njit(cache=True, inline="always")
-def solid_distance(x, y, z, params, p, g) -> float:
-    """Signed distance [m] of the point ``(x, y, z)`` to the solid of the SOLIDS parameters at
-    ``params[p:]`` (negative inside), and its gradient into ``g[:3]`` (world frame).
-
-    The point in the solid's frame is ``q = Rᵀ(point − c)``; dims are: a sphere's radius; a box's half sides;
-    a capsule's radius and half length along its z axis; nothing for a half-space (the solid is ``q_z <= 0``).
-    Inside a box the gradient is the nearest face's normal.
-    """
-    solid = int(params[p])
-    v0, v1, v2 = x - params[p + 10], y - params[p + 11], z - params[p + 12]
-    q0 = params[p + 1] * v0 + params[p + 4] * v1 + params[p + 7] * v2  # Rᵀ v
-    q1 = params[p + 2] * v0 + params[p + 5] * v1 + params[p + 8] * v2
-    q2 = params[p + 3] * v0 + params[p + 6] * v1 + params[p + 9] * v2
-    d0, d1, d2 = params[p + 13], params[p + 14], params[p + 15]
-    l0, l1, l2 = 0.0, 0.0, 0.0  # the gradient in the solid's frame
-    if solid == SOLID_HALFSPACE:
-        sd, l2 = q2, 1.0
-    elif solid == SOLID_BOX:
-        a0, a1, a2 = abs(q0) - d0, abs(q1) - d1, abs(q2) - d2
-        o0, o1, o2 = max(a0, 0.0), max(a1, 0.0), max(a2, 0.0)
-        outside = np.sqrt(o0 * o0 + o1 * o1 + o2 * o2)
-        s0, s1, s2 = (1.0 if q0 >= 0.0 else -1.0), (1.0 if q1 >= 0.0 else -1.0), (1.0 if q2 >= 0.0 else -1.0)
-        if outside > 0.0:
-            sd = outside
-            l0, l1, l2 = s0 * o0 / outside, s1 * o1 / outside, s2 * o2 / outside
-        elif a0 >= a1 and a0 >= a2:
-            sd, l0 = a0, s0
-        elif a1 >= a2:
-            sd, l1 = a1, s1
-        else:
-            sd, l2 = a2, s2
-    else:  # a sphere (the capsule's segment of half length 0) or a capsule
-        if solid == SOLID_CAPSULE:
-            q2 -= min(d1, max(-d1, q2))
-        norm = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2)
-        sd = norm - d0
-        if norm > 0.0:
-            l0, l1, l2 = q0 / norm, q1 / norm, q2 / norm
-        else:
-            l2 = 1.0
-    for c in range(3):  # g = R l
-        g[c] = params[p + 1 + 3 * c] * l0 + params[p + 2 + 3 * c] * l1 + params[p + 3 + 3 * c] * l2
-    return sd
 
 
 @numba.njit(cache=True)
