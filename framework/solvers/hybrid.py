@@ -136,7 +136,9 @@ class Hybrid(IKSolver):
             history.extend(run.history.tolist())
             return run.x
 
-        def better(a, b):  # the engine result that reaches the task, else the lower cost
+        def better(a, b):  # the engine result that reaches the task, else the lower cost (``a`` may be None)
+            if a is None:
+                return b
             if a.reached != b.reached:
                 return a if a.reached else b
             return min((a, b), key=lambda c: float(problem.cost(c.x)[0]))
@@ -160,17 +162,17 @@ class Hybrid(IKSolver):
         def clear_first(x: np.ndarray | None, settings: LocalSettings):
             """The problem without its collision terms from ``x`` (``None``: a drawn start): its answer as the whole
             problem's, and the check, when coal finds it clear by the terms' margins (the terms' inequalities are
-            inactive there); else ``(None, None)``."""
+            inactive there), and True; else ``(None, None, met)``: whether that answer met the task (in contact)."""
             result = engine(x, settings, problem.without_collision_terms.program)
             if not result.reached:
-                return None, None
+                return None, None, False
             report = problem.collisions(result.x, margins=True)
             if report.colliding:
-                return None, None
+                return None, None, True
             whole = LocalResult(result.x, True, "reached", problem.program.task_errors(result.x), result.iterations,
                                 result.evaluations, result.restarts, result.regularized, None,
                                 problem.values(result.x[None])[0])
-            return whole, report
+            return whole, report, True
 
         escalated, check, best = False, None, None
         first = settings if start == "middle" or not o.restarts else _in_basin(settings)
@@ -178,12 +180,16 @@ class Hybrid(IKSolver):
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
         loose = problem.checks_collisions and not o.global_iterations and problem.priorities \
             and problem.program.loose_hulls and problem.without_collision_terms is not None
+        met = True  # whether the warm start's basin met the task without the collision terms
         if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
-            best, check = clear_first(x0, first)
+            best, check, met = clear_first(x0, first)
         if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
-            best = hulls(engine(x0, first))  # to leave it), then random restarts (that basin was searched: the
-            if not best.reached and first is not settings and request.time_left() > 0:  # first is drawn too)
-                found, check = clear_first(None, settings) if loose else (None, None)  # drawn, as below
+            # to leave it), then random restarts (that basin was searched: the first is drawn too). A basin that
+            # misses the task without the collision terms misses it with them: then straight to the restarts
+            skip = not met and first is not settings and request.time_left() > 0
+            best = None if skip else hulls(engine(x0, first))
+            if best is None or (not best.reached and first is not settings and request.time_left() > 0):
+                found, check, _ = clear_first(None, settings) if loose else (None, None, False)  # drawn, as below
                 best = found if found is not None else better(best, hulls(engine(None)))  # a drawn start
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
