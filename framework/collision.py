@@ -117,6 +117,7 @@ class RobotShape:
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
         self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]] | None = None
         self._broad: dict[int, tuple[pin.GeometryModel, BoundingSpheres]] = {}
+        self._hull_models: dict[int, tuple[pin.GeometryModel, tuple | None]] = {}
 
     def _remove_always_colliding(self, samples: int) -> None:
         rng = np.random.default_rng(0)
@@ -211,12 +212,10 @@ class RobotShape:
     def hull(self, index: int):
         """The convex coal geometry of geometry object ``index``: a mesh's convex hull (built once, qhull), a
         primitive as it is. It holds the geometry: hulls apart mean the geometries are."""
-        import coal
-
         hull = self._hulls.get(index)
         if hull is None:
             geometry = self.geometry.geometryObjects[index].geometry
-            if isinstance(geometry, coal.BVHModelBase):
+            if _is_mesh(geometry):
                 geometry = geometry.clone()  # the exact check keeps its own mesh untouched
                 geometry.buildConvexHull(False, "Qt")
                 geometry = geometry.convex
@@ -256,6 +255,41 @@ class RobotShape:
             solids = {k: links[g.name] for k, g in enumerate(geometry.geometryObjects) if g.name in links}
             entry = self._broad[id(geometry)] = (geometry, bounding_spheres(self.robot, geometry,
                                                                             {**solids, **(obstacles or {})}))
+        return entry[1]
+
+    def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margin: float, q: np.ndarray,
+                      near: list[int]) -> list[int]:
+        """The pairs among ``near`` that coal's collision test flags on the exact geometry at ``q`` (``data``: with
+        ``margin``). A pair with a mesh is tested first on the convex hulls (:meth:`hull`): hulls apart by the
+        margin, the meshes they hold are, and two hulls cost coal ~1.5 µs against ~8 µs for two of PR2's meshes."""
+        pin.updateGeometryPlacements(self.robot.model, self._data, geometry, data, q)
+        hulls = self._hull_model(geometry)
+        if hulls is None:
+            return [k for k in near if pin.computeCollision(geometry, data, k)]
+        model, hull_data, exact = hulls
+        hull_data = self._margin_data(model, hull_data, margin)
+        pin.updateGeometryPlacements(self.robot.model, self._data, model, hull_data)  # the joints placed above
+        return [k for k in near if pin.computeCollision(model, hull_data, k)
+                and (exact[k] or pin.computeCollision(geometry, data, k))]
+
+    def _hull_model(self, geometry: pin.GeometryModel) -> tuple[pin.GeometryModel, pin.GeometryData, list[bool]] | None:
+        """``geometry`` (the robot's own model, or one with a scene) with the robot's meshes as their convex hulls,
+        its data, and for each pair whether the hulls are its exact geometry (no mesh); ``None`` when the robot
+        has no mesh. Made once per model."""
+        entry = self._hull_models.get(id(geometry))
+        if entry is None or entry[0] is not geometry:
+            if len(self._hull_models) > 16:
+                self._hull_models.clear()
+            # a scene's model: the robot's geometries, then the obstacles (as they are)
+            meshes = {k for k, g in enumerate(self.geometry.geometryObjects) if _is_mesh(g.geometry)}
+            model = None
+            if meshes:
+                model = geometry.copy()
+                for k in meshes:
+                    model.geometryObjects[k].geometry = self.hull(k)
+                exact = [p.first not in meshes and p.second not in meshes for p in geometry.collisionPairs]
+                model = (model, model.createData(), exact)
+            entry = self._hull_models[id(geometry)] = (geometry, model)
         return entry[1]
 
     def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]]:
@@ -314,9 +348,7 @@ class RobotShape:
                 data = self._margin_data(geometry, data, margin)
                 if len(pairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
                     near = self._bounding_spheres(geometry, obstacles).near_pairs(x, margin).tolist()
-                    if near:
-                        pin.updateGeometryPlacements(self.robot.model, self._data, geometry, data, q)
-                    flagged = [k for k in near if pin.computeCollision(geometry, data, k)]
+                    flagged = self._narrow_phase(geometry, data, margin, q, near) if near else []
                 else:
                     any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
                     flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] \
@@ -329,6 +361,13 @@ class RobotShape:
         if not distances and not contacts:
             smallest = float("nan")
         return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest), float(margin))
+
+
+def _is_mesh(geometry) -> bool:
+    """Whether a coal geometry is a triangle mesh (a BVH model: not convex in general)."""
+    import coal
+
+    return isinstance(geometry, coal.BVHModelBase)
 
 
 def merge_reports(reports: Sequence[CollisionReport]) -> CollisionReport:

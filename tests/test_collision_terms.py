@@ -198,12 +198,14 @@ def test_a_loose_cover_keeps_the_answer_without_the_terms_when_coal_finds_it_cle
 
 def test_the_fast_check_with_a_margin_finds_the_pairs_closer_than_it(erd, rng):
     """``check(x, margin, distances=False)`` (coal's security margin) flags exactly the pairs whose distance
-    (coal's distance computation on every pair) is below the margin, on PR2's meshes and the youBot's spheres."""
+    (coal's distance computation on every pair) is below the margin, on PR2's meshes (tested on their convex hulls
+    first) and the youBot's spheres."""
     pr2 = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
                         joints=["torso_lift_joint", "l_shoulder_pan_joint", "l_elbow_flex_joint",
                                 "r_shoulder_pan_joint", "r_elbow_flex_joint"])
     for robot in (pr2, fw.load_robot("youbot_dual_mobile")):
         shape = fw.RobotShape(robot)
+        assert (shape._hull_model(shape.geometry) is not None) == (robot is pr2)  # the hulls' pass: meshes only
         for x in robot.random_configurations(rng, 15):
             for margin in (0.0, 0.02, 0.05):
                 fast = shape.check(x, margin, distances=False)
