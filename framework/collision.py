@@ -333,8 +333,8 @@ class RobotShape:
         """
         if not (np.isfinite(margin) and margin >= 0.0):
             raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
-        x = np.asarray(x, dtype=float)
-        q = self.robot.to_pinocchio(x)
+        x = self.robot.check_population(x)[0]
+        q = None  # Pinocchio's configuration, made when coal needs it (not when the broad phase finds no pair near)
         models = [(self.geometry, self._geometry_data, None)] if self_pairs else []
         if scene is not None:
             models.append(self._with_scene(scene))
@@ -342,14 +342,19 @@ class RobotShape:
         for geometry, data, obstacles in models:
             objects, pairs = geometry.geometryObjects, geometry.collisionPairs
             if distances:
+                q = self.robot.to_pinocchio(x) if q is None else q
                 pin.computeDistances(self.robot.model, self._data, geometry, data, q)
                 found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
             else:
                 data = self._margin_data(geometry, data, margin)
                 if len(pairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
                     near = self._bounding_spheres(geometry, obstacles).near_pairs(x, margin).tolist()
-                    flagged = self._narrow_phase(geometry, data, margin, q, near) if near else []
+                    flagged = []
+                    if near:
+                        q = self.robot.to_pinocchio(x) if q is None else q
+                        flagged = self._narrow_phase(geometry, data, margin, q, near)
                 else:
+                    q = self.robot.to_pinocchio(x) if q is None else q
                     any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
                     flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] \
                         if any_contact else []
