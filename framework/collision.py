@@ -198,8 +198,7 @@ class RobotShape:
                 volume = float(np.pi * shape.radius ** 2 * (2 * shape.halfLength + 4 / 3 * shape.radius))
             else:
                 continue
-            out[g.name] = (int(g.parentJoint), g.placement, np.concatenate([[solid], np.eye(3).ravel(), np.zeros(3),
-                                                                              dims]), volume)
+            out[g.name] = (int(g.parentJoint), g.placement, solid_row(solid, np.eye(3), np.zeros(3), dims), volume)
         return out
 
     def memo(self, key: tuple, make):
@@ -272,7 +271,8 @@ class RobotShape:
         return [k for k in near if pin.computeCollision(model, hull_data, k)
                 and (exact[k] or pin.computeCollision(geometry, data, k))]
 
-    def _hull_model(self, geometry: pin.GeometryModel) -> tuple[pin.GeometryModel, pin.GeometryData, list[bool]] | None:
+    def _hull_model(self, geometry: pin.GeometryModel
+                    ) -> tuple[pin.GeometryModel, pin.GeometryData, list[bool]] | None:
         """``geometry`` (the robot's own model, or one with a scene) with the robot's meshes as their convex hulls,
         its data, and for each pair whether the hulls are its exact geometry (no mesh); ``None`` when the robot
         has no mesh. Made once per model."""
@@ -327,9 +327,9 @@ class RobotShape:
         ``distances=False`` is the fast check: coal's collision test (with ``margin`` as its security margin:
         pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, or against a
         scene's solids, on the pairs whose bounding spheres (or solids) come within the margin (the others cannot:
-        :mod:`framework.broad_phase`) — and
-        distances only for the pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then
-        the closest flagged pair's, or NaN (not measured) when there is none.
+        :mod:`framework.broad_phase`), pairs with a mesh on their convex hulls first — and distances only for the
+        pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then the closest flagged
+        pair's, or NaN (not measured) when there is none.
         """
         if not (np.isfinite(margin) and margin >= 0.0):
             raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
