@@ -19,9 +19,10 @@ installed ``example-robot-data`` resolves so).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -229,32 +230,27 @@ class RobotShape:
         costs ~0.4 µs per pair)."""
         if margin == 0.0:
             return data
-        key = (id(geometry), margin)
-        entry = self._margined.get(key)
-        if entry is None or entry[0] is not geometry:
-            if len(self._margined) > 16:
-                self._margined.clear()
-            entry = (geometry, geometry.createData())
-            for request in entry[1].collisionRequests:
+
+        def make() -> pin.GeometryData:
+            margined = geometry.createData()
+            for request in margined.collisionRequests:
                 request.security_margin = margin
-            self._margined[key] = entry
-        return entry[1]
+            return margined
+
+        return _kept(self._margined, (id(geometry), margin), geometry, make)
 
     def _bounding_spheres(self, geometry: pin.GeometryModel,
                           obstacles: dict[int, np.ndarray] | None = None) -> BoundingSpheres:
         """The broad phase of ``geometry`` (the robot's own model, or one with a scene whose exact obstacles'
         solid rows are ``obstacles``, by geometry index), made once per model. Links' boxes and cylinders are
         measured as their solids (:meth:`solids`)."""
-        entry = self._broad.get(id(geometry))
-        if entry is None or entry[0] is not geometry:
-            if len(self._broad) > 16:
-                self._broad.clear()
+        def make() -> BoundingSpheres:
             links = {name: solid_row(int(row[0]), placement.rotation, placement.translation, row[13:16])
                      for name, (_, placement, row, _) in self.solids().items()}  # in the body's frame
             solids = {k: links[g.name] for k, g in enumerate(geometry.geometryObjects) if g.name in links}
-            entry = self._broad[id(geometry)] = (geometry, bounding_spheres(self.robot, geometry,
-                                                                            {**solids, **(obstacles or {})}))
-        return entry[1]
+            return bounding_spheres(self.robot, geometry, {**solids, **(obstacles or {})})
+
+        return _kept(self._broad, id(geometry), geometry, make)
 
     def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margin: float, q: np.ndarray,
                       near: list[int]) -> list[int]:
@@ -276,21 +272,18 @@ class RobotShape:
         """``geometry`` (the robot's own model, or one with a scene) with the robot's meshes as their convex hulls,
         its data, and for each pair whether the hulls are its exact geometry (no mesh); ``None`` when the robot
         has no mesh. Made once per model."""
-        entry = self._hull_models.get(id(geometry))
-        if entry is None or entry[0] is not geometry:
-            if len(self._hull_models) > 16:
-                self._hull_models.clear()
+        def make():
             # a scene's model: the robot's geometries, then the obstacles (as they are)
             meshes = {k for k, g in enumerate(self.geometry.geometryObjects) if _is_mesh(g.geometry)}
-            model = None
-            if meshes:
-                model = geometry.copy()
-                for k in meshes:
-                    model.geometryObjects[k].geometry = self.hull(k)
-                exact = [p.first not in meshes and p.second not in meshes for p in geometry.collisionPairs]
-                model = (model, model.createData(), exact)
-            entry = self._hull_models[id(geometry)] = (geometry, model)
-        return entry[1]
+            if not meshes:
+                return None
+            model = geometry.copy()
+            for k in meshes:
+                model.geometryObjects[k].geometry = self.hull(k)
+            exact = [p.first not in meshes and p.second not in meshes for p in geometry.collisionPairs]
+            return model, model.createData(), exact
+
+        return _kept(self._hull_models, id(geometry), geometry, make)
 
     def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]]:
         """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the
@@ -366,6 +359,17 @@ class RobotShape:
         if not distances and not contacts:
             smallest = float("nan")
         return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest), float(margin))
+
+
+def _kept(cache: dict, key: object, geometry: pin.GeometryModel, make: Callable[[], Any]) -> Any:
+    """``make()`` for ``geometry``, kept in ``cache`` under ``key`` (holding ``id(geometry)``; the entry holds the
+    model too, so a new model that reuses a freed one's id is not served its entry); at most 17 entries."""
+    entry = cache.get(key)
+    if entry is None or entry[0] is not geometry:
+        if len(cache) > 16:
+            cache.clear()
+        entry = cache[key] = (geometry, make())
+    return entry[1]
 
 
 def _is_mesh(geometry) -> bool:
