@@ -309,32 +309,50 @@ def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
     (columns add up: a mimic joint adds its multiplier times its own column to its leader's)."""
     J[:] = 0.0
     for f in range(fslot.shape[0]):
-        px, py, pz = out[f, 9], out[f, 10], out[f, 11]
-        j = fslot[f]
-        while j > 0:
-            kind, i = jint[j, 1], jint[j, 2]
-            w = W[j]
-            ux, uy, uz, m = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14], jgeo[j, 15]
-            if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
-                c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
-                for r in range(3):
-                    J[f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
-                    J[f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
-                ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
-            # world axis a = R_j u (the joint's own rotation leaves u fixed), times the joint's multiplier
-            ax = m * (w[0] * ux + w[1] * uy + w[2] * uz)
-            ay = m * (w[3] * ux + w[4] * uy + w[5] * uz)
-            az = m * (w[6] * ux + w[7] * uy + w[8] * uz)
-            if kind == 1:  # prismatic: translation along a
-                J[f, 0, i] += ax
-                J[f, 1, i] += ay
-                J[f, 2, i] += az
-            else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
-                dx, dy, dz = px - w[9], py - w[10], pz - w[11]
-                J[f, 0, i] += ay * dz - az * dy
-                J[f, 1, i] += az * dx - ax * dz
-                J[f, 2, i] += ax * dy - ay * dx
-                J[f, 3, i] += ax
-                J[f, 4, i] += ay
-                J[f, 5, i] += az
-            j = jint[j, 0]
+        frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
+
+
+@numba.njit(cache=True)
+def frame_jacobians_where(x, jint, jgeo, fslot, out, W, J, need):
+    """:func:`frame_jacobians` of the frames ``f`` with ``need[f] != 0`` only (``need (k,)``; the other frames'
+    ``J[f]`` are left as they were)."""
+    for f in range(fslot.shape[0]):
+        if need[f] != 0.0:
+            for r in range(6):
+                for i in range(J.shape[2]):
+                    J[f, r, i] = 0.0
+            frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
+
+
+@numba.njit(cache=True, inline="always")
+def frame_jacobian(f, x, jint, jgeo, fslot, out, W, J):
+    """Frame ``f``'s Jacobian added into ``J[f] (6, n)`` (zeroed before) along its chain of joints."""
+    px, py, pz = out[f, 9], out[f, 10], out[f, 11]
+    j = fslot[f]
+    while j > 0:
+        kind, i = jint[j, 1], jint[j, 2]
+        w = W[j]
+        ux, uy, uz, m = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14], jgeo[j, 15]
+        if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
+            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+            for r in range(3):
+                J[f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
+                J[f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]
+            ux, uy, uz, i = 0.0, 0.0, 1.0, i + 2
+        # world axis a = R_j u (the joint's own rotation leaves u fixed), times the joint's multiplier
+        ax = m * (w[0] * ux + w[1] * uy + w[2] * uz)
+        ay = m * (w[3] * ux + w[4] * uy + w[5] * uz)
+        az = m * (w[6] * ux + w[7] * uy + w[8] * uz)
+        if kind == 1:  # prismatic: translation along a
+            J[f, 0, i] += ax
+            J[f, 1, i] += ay
+            J[f, 2, i] += az
+        else:  # revolute (and planar θ): a × (p_frame - p_joint), angular a
+            dx, dy, dz = px - w[9], py - w[10], pz - w[11]
+            J[f, 0, i] += ay * dz - az * dy
+            J[f, 1, i] += az * dx - ax * dz
+            J[f, 2, i] += ax * dy - ay * dx
+            J[f, 3, i] += ax
+            J[f, 4, i] += ay
+            J[f, 5, i] += az
+        j = jint[j, 0]

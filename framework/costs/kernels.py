@@ -10,11 +10,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..kinematics import fk_one, frame_jacobians
+from ..kinematics import fk_one, frame_jacobians_where
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
 from .blocks import (
+    COM,
+    COUNT,
     FA,
     FB,
+    IPTR,
     KIND,
     LEVEL,
     LEVEL_REGULARIZER,
@@ -50,7 +53,8 @@ ROW0 = np.int64(0)
 def workspace(kin, prog, n):
     """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
     ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
-    scratch (:func:`~framework.costs.collision_blocks.scratch_size`) — as views of one allocation."""
+    scratch (:func:`~framework.costs.collision_blocks.scratch_size`, at least ``k``: it holds the frames whose
+    Jacobians a call needs, before the blocks use it) — as views of one allocation."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
@@ -58,7 +62,7 @@ def workspace(kin, prog, n):
         rows += bint[b, ROWS]
     rows = max(rows, 1)
     k, J = fslot.shape[0], jint.shape[0]
-    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, scratch_size(bint, prog[2]))
+    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, max(scratch_size(bint, prog[2]), k))
     total = 0
     for size in sizes:
         total += size
@@ -97,8 +101,9 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     x = borrow(x)
     if kinematics == 1:
         fk_one(x, jint, jgeo, fslot, fgeo, out, W)
-    if want_jacobian and kinematics >= 1:
-        frame_jacobians(x, jint, jgeo, fslot, out, W, Jf)
+    if want_jacobian and kinematics >= 1:  # the frames some block of level 1 or 2 reads (E9: scratch till the blocks)
+        frames_needed(level, bint, idx, r, kinematics == 2, E9, fslot.shape[0])
+        frame_jacobians_where(x, jint, jgeo, fslot, out, W, Jf, E9)
     row = ROW0
     for b in range(bint.shape[0]):
         lv = bint[b, LEVEL]
@@ -116,6 +121,35 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
         else:
             row += block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jacobian, L3, E9)
     return row
+
+
+@numba.njit(cache=True, inline="always")
+def frames_needed(level, bint, idx, r, clear_hinges, need, k) -> None:
+    """``need[:k]``: 1 for each frame a block of level 1 or 2 reads (those of ``level`` the call evaluates, the
+    others for a later call reusing the kinematics), else 0; with ``clear_hinges``, the one-sided blocks of
+    ``level`` whose rows ``r`` are all zero (clear at these poses, their Jacobian zero) read none. A frame that only
+    the blocks set aside read (level 0: the engine's lazy contact rows) needs no Jacobian."""
+    for f in range(k):
+        need[f] = 0.0
+    row = ROW0
+    for b in range(bint.shape[0]):
+        lv = bint[b, LEVEL]
+        if lv == 0:
+            continue
+        if level < 0 or lv == level:
+            rows = bint[b, ROWS]
+            clear = clear_hinges and is_hinge(bint[b, KIND]) and rows_clear(r, row, rows)
+            row += rows
+            if clear:
+                continue
+        if bint[b, KIND] == COM:
+            for c in range(bint[b, COUNT]):
+                need[idx[bint[b, IPTR] + c]] = 1.0
+            continue
+        if bint[b, FA] >= 0:
+            need[bint[b, FA]] = 1.0
+        if bint[b, FB] >= 0:
+            need[bint[b, FB]] = 1.0
 
 
 @numba.njit(cache=True)
