@@ -213,3 +213,58 @@ def test_the_fast_check_with_a_margin_finds_the_pairs_closer_than_it(erd, rng):
                 assert {(c.a, c.b) for c in fast.contacts} == {(c.a, c.b) for c in full.contacts}
     with pytest.raises(TaskError, match="margin"):
         shape.check(robot.middle, -0.01, distances=False)
+
+
+def test_jacobians_of_the_frames_a_call_needs_equal_every_frames(rng):
+    """The engine computes frame Jacobians only for the frames its rows read: after a poses-only call, the
+    Jacobians from those poses (frames of clear contact rows skipped) and the descent without the contact rows
+    (their frames skipped) give the same residuals and Jacobian rows as one call computing every frame's
+    Jacobian — itself checked against finite differences in tests/test_costs.py. Dual youBot with SelfCollision,
+    at random configurations (most of them in contact) and at configurations clear of contact."""
+    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, workspace
+    from framework.engine.reach import without_contacts
+    from framework.taskfile import load_task
+
+    task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
+    robot = task.robot
+    problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.2, 0.4]) + fw.Position("arm2_ee", [0.5, -0.2, 0.4])
+                         + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
+    kin, prog = problem.program.kin, problem.program.prog
+    lazy = (without_contacts(prog[0])[0], *prog[1:])
+    whole, split, part = (workspace(kin, prog, robot.n) for _ in range(3))
+    active = clear = 0
+    for x in robot.random_configurations(rng, 120):
+        m = linearize(x, TASK, kin, prog, whole, YES, COMPUTE)
+        assert linearize(x, TASK, kin, prog, split, NO, COMPUTE) == m
+        linearize(x, TASK, kin, prog, split, YES, JACOBIANS_FROM_POSES)
+        np.testing.assert_array_equal(split[3][:m], whole[3][:m])
+        np.testing.assert_array_equal(split[4][:m], whole[4][:m])
+        contact = np.any(whole[3][6:m] != 0.0)
+        active += contact
+        clear += not contact
+        k = linearize(x, TASK, kin, lazy, part, YES, COMPUTE)  # the position rows only
+        assert k == 6
+        np.testing.assert_array_equal(part[4][:k], whole[4][:k])
+    assert active >= 10 and clear >= 3
+
+
+def test_the_newton_phase_stops_on_an_obstacle_it_starts_clear_of(sphere_arm):
+    """Motion towards a configuration whose forearm sphere is inside a sphere obstacle, from starts clear of it:
+    the forearm's centre turns on a circle with θ1 + θ2, so the obstacle (kept ``margin`` away) allows
+    θ1 + θ2 <= s_b = φ − 2 asin((R + ρ + margin) / 2L) on the starts' side, and the closest allowed configuration to
+    the motion target q is q's projection on θ1 + θ2 = s_b (closed form). The Newton phase's steps towards q
+    enter the obstacle's row, clear where they start. The motion target itself (the trivial answer) is in it."""
+    robot, shape, exact = sphere_arm
+    margin, phi, rho = 0.01, 1.5, 0.05
+    obstacle = fw.Sphere([L * np.cos(phi), L * np.sin(phi), 0.0], rho)
+    bound = phi - 2 * np.arcsin((R + rho + margin) / (2 * L))
+    for q in ([0.7, 0.6], [0.2, 1.1], [1.0, 0.25]):
+        q = np.array(q)
+        assert shape.check(q, scene=fw.Scene([obstacle]), self_pairs=False).colliding
+        expected = q + (bound - q.sum()) / 2
+        problem = fw.Problem(robot, fw.Obstacles(shape, [obstacle], margin=margin, cover=exact) + fw.Motion("all", q))
+        for start in ([0.3, 0.2], [0.1, 0.5], [0.6, -0.1]):
+            result = fw.solve(problem, initial=np.array(start), tolerance=1e-9)
+            assert result.success
+            np.testing.assert_allclose(result.configuration, expected, atol=1e-7)
+

@@ -6,6 +6,12 @@ regularizers (level 2, e.g. motion) without leaving it: Newton steps on the KKT 
 Lagrangian ``G − λᵀr`` (the regularizers' own curvature plus the task's second-order kinematics, see
 :func:`~framework.costs.curvature.block_curvature`), followed by Gauss-Newton steps back onto the task. A step is
 kept only if it lowers ``G`` on the task; otherwise the Hessian is damped (``H + μI``). Converges quadratically.
+One-sided rows (distance bands, cones, collision rows) are inequalities: a row with a Jacobian is held as an
+equality until its multiplier lets it go; a row clear where a step starts has no Jacobian there, so when a trial
+step enters one and is rejected, the step is solved again holding that row with its Jacobian at the trial
+(a *blocking* row: without it, the step would enter the contact again at every halving). A collision row is the
+smallest distance over sphere pairs, with a Jacobian that jumps where the closest pair changes: after
+:data:`KINK_FAILURES` failed iterations in a row with a one-sided row held, the phase stops.
 
 :func:`weighted_newton` — the weighted sum ``Σ w ρ(r)`` of every term as it stands, for objectives where
 reaching the task costs more than it gains (the papers' weighted objectives with small task weights): damped
@@ -18,7 +24,7 @@ import numba
 import numpy as np
 
 from ..costs.blocks import (HALFSIN, KIND, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, is_hinge, rho_derivatives,
-                            rho_value)
+                            rho_value, wrap_angle)
 from ..costs.curvature import block_curvature
 from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_AND_REGULARIZERS, YES,
                              level_value, linearize, task_errors, term_values, workspace)
@@ -31,6 +37,10 @@ from .reach import bounded_step, held, project, rows_of, squared_norm
 MU_START, MU_MIN, MU_MAX = 1e-8, 1e-14, 1e6
 #: Largest coordinate change of a first Newton step on the task [rad or m], and of any step.
 TRUST_START, TRUST_MAX = 0.1, 1.0
+#: Newton iterations in a row that find no step lowering G, with a one-sided row held, before the phase stops:
+#: a collision row is the smallest distance over sphere pairs, its Jacobian jumps where the closest pair
+#: changes, and steps across such a kink fail whatever the damping.
+KINK_FAILURES = 2
 #: Gauss-Newton steps back onto the task after a Newton step; halvings of a step before it is damped.
 RESTORE_STEPS, LINE_SEARCH = 4, 4
 #: Damping of those steps: enough for a Cholesky factor of a rank-deficient ``JᵀJ`` (clear hinge rows have no
@@ -155,6 +165,48 @@ def _active_rows(A, r, lam, hinge, arow, Aa, release) -> int:
 
 
 @numba.njit(cache=True)
+def _step_taken(x, xt, box_wrap, delta) -> None:
+    """``delta = xt − x (n,)``, the wrapping coordinates' differences taken the short way round."""
+    for i in range(x.shape[0]):
+        d = xt[i] - x[i]
+        delta[i] = wrap_angle(d) if box_wrap[i] else d
+
+
+@numba.njit(cache=True)
+def _entered(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta, Jb, cb, sb) -> bool:
+    """Whether the trial ``xt`` violates a one-sided row that is clear at ``x`` (``r_x`` zero, not held): the most
+    violated such row's Jacobian at ``xt`` into ``Jb``, its linearized value at ``x`` into ``cb`` and its violated
+    side into ``sb`` (``±1``; ``0`` for the other rows not held)."""
+    worst, pick = 0.0, -1
+    for a in range(hinge.shape[0]):
+        if held_now[a] or not hinge[a]:
+            continue
+        sb[a] = 0.0
+        if r_x[a] == 0.0 and abs(r[a]) > worst:
+            worst, pick = abs(r[a]), a
+    if pick < 0:
+        return False
+    _step_taken(x, xt, box_wrap, delta)
+    c = r[pick]
+    for i in range(x.shape[0]):
+        Jb[pick, i] = J[pick, i]
+        c -= J[pick, i] * delta[i]
+    cb[pick] = c
+    sb[pick] = 1.0 if r[pick] > 0.0 else -1.0
+    return True
+
+
+@numba.njit(cache=True)
+def _moved(x, xt, box_wrap, blocking, Jb, cb, delta) -> None:
+    """The blocking rows' linearized values carried from ``x`` to the accepted ``xt``."""
+    _step_taken(x, xt, box_wrap, delta)
+    for a in range(blocking.shape[0]):
+        if blocking[a]:
+            for i in range(x.shape[0]):
+                cb[a] += Jb[a, i] * delta[i]
+
+
+@numba.njit(cache=True)
 def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
                errors, values, stats) -> int:
     """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
@@ -183,7 +235,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
            np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + m, n + m)), np.empty((n + m, n + m + 1)),
            np.empty(n + m), np.empty(n + m), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
            np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(m, dtype=np.int64), np.empty((m, n)),
-           np.zeros(m))
+           np.zeros(m), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
+           np.zeros(m), np.empty(n))
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
     tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
@@ -194,6 +247,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         borrow(own[18]), borrow(own[19])
     gr, Hr, mu_r, Hlb, Jc = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23]), borrow(own[24])
     arow, Aa, lam_a = borrow(own[25]), borrow(own[26]), borrow(own[27])
+    # blocking rows: one-sided rows clear at x (no Jacobian there) that the last trial step entered, held with
+    # their linearization at that trial (``Jb`` rows, value at x ``cb``, violated side ``sb``) until they are
+    # active at x with a Jacobian of their own, or their multiplier lets them go
+    held_now, blocking, Jb, cb, sb, delta = borrow(own[28]), borrow(own[29]), borrow(own[30]), borrow(own[31]), \
+        borrow(own[32]), borrow(own[33])
     linearize(x, TASK, kin, prog, cur, YES, COMPUTE)
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     evaluations = 1
@@ -207,6 +265,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     mu, trust, last_step = MU_START, TRUST_START, 0.0
     status, iterations, accepted = ITERATIONS, 0, 0
     bint = prog[0]
+    unblocked, failed = False, 0
     while iterations < max_iterations:
         if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
             status = DEADLINE
@@ -217,11 +276,23 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                                   2.0 * last_step)
             fresh = True
         ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, True)
-        held_row = 0
-        for a in range(m):  # released and clear rows carry no multiplier (arow is increasing)
-            if held_row < ma and arow[held_row] == a:
-                held_row += 1
-            else:
+        own_rows = ma  # rows held with their own Jacobian at x; the blocking rows follow them
+        held_now[:] = False
+        for c in range(ma):
+            held_now[arow[c]] = True
+        for a in range(m):
+            if not blocking[a]:
+                continue
+            if held_now[a] or lam[a] * sb[a] > 0.0:  # active at x, or its multiplier pulls to its free side
+                blocking[a] = False
+                continue
+            arow[ma] = a
+            for i in range(n):
+                Aa[ma, i] = Jb[a, i]
+            held_now[a] = True
+            ma += 1
+        for a in range(m):  # released and clear rows carry no multiplier
+            if not held_now[a]:
                 lam[a] = 0.0
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
             s = g[i]
@@ -234,6 +305,10 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 fidx[nf] = i
                 nf += 1
         if nf <= ma:
+            if ma > own_rows:  # held by the blocking rows (linearized at trial points): backtrack without them
+                blocking[:] = False
+                unblocked = True
+                continue
             status = CONVERGED
             break
         row = ROW0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
@@ -264,8 +339,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         for a in range(ma):
             for c in range(ma):
                 Kv[nf + a, nf + c] = 0.0
-            rv[nf + a] = -cur[3][arow[a]]
+            rv[nf + a] = -cur[3][arow[a]] if a < own_rows else -cb[arow[a]]
         if not lu_solve(Kv, rv, Mv, sv):
+            if ma > own_rows:  # the blocking rows' Jacobians (from trial points) made it singular: let them go,
+                blocking[:] = False  # and backtrack without them until a step is taken
+                unblocked = True
+                continue
             mu *= 10.0
             if mu > MU_MAX:
                 status = STALLED
@@ -277,25 +356,30 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         for a in range(nf):
             dx[fidx[a]] = sv[a]
             step = max(step, abs(sv[a]))
-        if step < 1e-12:
+        predicted = 0.0  # first-order decrease of the Lagrangian along the step (within the trust region)
+        for i in range(n):
+            predicted -= gl[i] * dx[i]
+        if step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
+            predicted *= trust / step
+        if step < 1e-12 or predicted < 1e-15 * (1.0 + abs(G)):  # no step, or below what G can resolve
+            if ma > own_rows:  # stopped by the blocking rows: backtrack without them
+                blocking[:] = False
+                unblocked = True
+                continue
             status = CONVERGED
             break
-        if step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
+        if step > trust:
             for i in range(n):
                 dx[i] *= trust / step
             step = trust
-        predicted = 0.0  # first-order decrease of the Lagrangian along the step
-        for i in range(n):
-            predicted -= gl[i] * dx[i]
-        if predicted < 1e-15 * (1.0 + abs(G)):  # below what G can resolve: the optimum to rounding
-            status = CONVERGED
-            break
-        alpha, accepted_step, Gt = 1.0, False, G
+        alpha, accepted_step, Gt, entered = 1.0, False, G, False
         for _ in range(LINE_SEARCH):  # backtrack along the Newton direction before damping it
             for i in range(n):
                 xt[i] = x[i] + alpha * dx[i]
             project(xt, lower, upper, box_wrap)
             linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
+            entered = not unblocked and _entered(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta,
+                                                 Jb, cb, sb)
             e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym,
                          dxm, Jc, RESTORE_STEPS, feasible)
             linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
@@ -304,12 +388,17 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if e <= 10.0 * feasible and Gt < G:
                 accepted_step = True
                 break
+            if entered:  # the step entered one-sided rows clear at x: solve it again holding them
+                break
             alpha *= 0.5
         if accepted_step:
             gain = G - Gt
             cur, tri = tri, cur
             cur_r, tri_r = tri_r, cur_r
+            _moved(x, xt, box_wrap, blocking, Jb, cb, delta)
             x[:] = xt
+            unblocked = False
+            failed = 0
             G = Gt
             for a in range(m):
                 lam[a] = 0.0
@@ -326,10 +415,18 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if alpha * step < 1e-10 or gain <= 1e-16 * (1.0 + abs(G)):
                 status = CONVERGED
                 break
+        elif entered:
+            for a in range(m):  # the candidates written by _entered become blocking rows
+                if not held_now[a] and sb[a] != 0.0:
+                    blocking[a] = True
         else:
             trust *= 0.1
             mu *= 10.0
-            if mu > MU_MAX or trust < 1e-12:
+            failed += 1
+            kinked = False
+            for c in range(ma):
+                kinked = kinked or hinge[arow[c]]
+            if mu > MU_MAX or trust < 1e-12 or (kinked and failed >= KINK_FAILURES):
                 status = STALLED
                 break
     _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym, dxm, Jc,
