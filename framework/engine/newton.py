@@ -419,6 +419,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for a in range(m):  # the candidates written by _entered become blocking rows
                 if not held_now[a] and sb[a] != 0.0:
                     blocking[a] = True
+        elif ma > own_rows:  # no step along the blocking rows (linearized at trial points): backtrack without them
+            blocking[:] = False
+            unblocked = True
         else:
             trust *= 0.1
             mu *= 10.0
