@@ -125,16 +125,17 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
 
 @numba.njit(cache=True, inline="always")
 def frames_needed(level, bint, idx, r, clear_hinges, need, k) -> None:
-    """``need[:k]``: 1 for each frame a block of level 1 or 2 reads (those of ``level`` the call evaluates, the
-    others for a later call reusing the kinematics), else 0; with ``clear_hinges``, the one-sided blocks of
-    ``level`` whose rows ``r`` are all zero (clear at these poses, their Jacobian zero) read none. A frame that only
-    the blocks set aside read (level 0: the engine's lazy contact rows) needs no Jacobian."""
+    """``need[:k]``: 1 for each frame a block of ``level`` or of level 1 or 2 reads (those of ``level`` the call
+    evaluates, the others for a later call reusing the kinematics), else 0; with ``clear_hinges``, the one-sided
+    blocks of ``level`` whose rows ``r`` are all zero (clear at these poses, their Jacobian zero) read none. A frame
+    that only blocks set aside read (level 0 when another level is asked for: value-only terms, the engine's lazy
+    contact rows) needs no Jacobian."""
     for f in range(k):
         need[f] = 0.0
     row = ROW0
     for b in range(bint.shape[0]):
         lv = bint[b, LEVEL]
-        if lv == 0:
+        if lv == 0 and level != 0:
             continue
         if level < 0 or lv == level:
             rows = bint[b, ROWS]
