@@ -58,6 +58,12 @@ def test_pose_targets_as_se3_matrix_or_pair_agree(panda, rng):
         fw.Pose(tip, bad)
     with pytest.raises(fw.TaskError, match="4x4"):
         fw.Pose(tip, np.eye(3))
+    with pytest.raises(fw.TaskError, match=f"pose target of '{tip}' is not a rotation matrix"):
+        fw.Pose(tip, pin.SE3(np.diag([1.0, 1.0, 2.0]), np.zeros(3)))  # an SE3 holding no rotation
+    moved = panda.frame_placement(panda.middle, tip)
+    terms[0].set_target(moved)  # position and rotation follow the target
+    np.testing.assert_array_equal(terms[0].position, moved.translation)
+    np.testing.assert_array_equal(terms[0].rotation, moved.rotation)
 
 
 def test_motion_is_minimized_on_the_task(rng):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 
@@ -13,10 +15,14 @@ from .base import Term, as_vector, finite_rows
 from .program import Block
 
 
-def pose_parameters(target, what: str) -> np.ndarray:
+def pose_parameters(target, what: str | Callable[[], str]) -> np.ndarray:
     """``(12,)``: the position then the row-major rotation of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
-    ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated."""
+    ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated (``what``
+    names it in errors: a string, or a callable making it only when there is one)."""
     out = np.empty(12)
+    if type(target) is pin.SE3 and pack_transform(target.homogeneous, out) == 0:  # the common case
+        return out
+    what = what if isinstance(what, str) else what()
     if isinstance(target, tuple) and len(target) == 2:
         out[:3] = as_vector(target[0], 3, f"{what} position")
         out[3:] = rotation_from(target[1], what).ravel()
@@ -68,9 +74,18 @@ class Pose(Term):
 
     def set_target(self, target) -> None:
         """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""
-        p = self._parameters = pose_parameters(target, f"pose target of {self.frame!r}")
-        self.position, self.rotation = p[:3], p[3:].reshape(3, 3)  # views of the parameters
+        self._parameters = pose_parameters(target, lambda: f"pose target of {self.frame!r}")
         self._touch()
+
+    @property
+    def position(self) -> np.ndarray:
+        """``(3,)`` the target position [m] (a view of the packed parameters)."""
+        return self._parameters[:3]
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """``(3, 3)`` the target rotation (a view of the packed parameters)."""
+        return self._parameters[3:].reshape(3, 3)
 
     def parameters(self, robot: Robot) -> np.ndarray:
         return self._parameters

@@ -197,7 +197,8 @@ class Program:
         self.layout = layout
         self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
         flat = [terms[k].parameters(robot) for k in layout.packed_terms]
-        params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
+        params = np.array(flat[0], dtype=float) if len(flat) == 1 else \
+            np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)  # (one term: a copy)
         self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
         self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
         self.task_angular, self.task_checked_exactly = layout.task_angular, layout.task_checked_exactly
