@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -31,7 +30,6 @@ DEFAULT_SOLVER = "hybrid"
 DEFAULT_TOLERANCE = 1e-6
 
 
-@dataclass
 class IKResult:
     """What one IK solve produced.
 
@@ -58,23 +56,90 @@ class IKResult:
             (e.g. CMA-ES's adapted covariance along a trajectory).
         collisions: the exact collision check at ``configuration`` (coal on the URDF's geometry) when the
             problem has collision terms, else ``None``.
+
+    ``terms``, ``task_error``, ``errors`` and ``history`` are made from the solve's numbers when first read
+    (most callers read only the configuration and the success: a solve should not pay for tables nobody reads);
+    a pickled result carries them made.
     """
 
-    configuration: np.ndarray
-    cost: float
-    terms: dict[str, float]
-    task_error: float
-    success: bool
-    stop_reason: str
-    iterations: int
-    evaluations: int
-    wall_time: float
-    history: np.ndarray = field(repr=False)
-    solver: str
-    settings: dict[str, Any] = field(default_factory=dict, repr=False)
-    state: dict[str, Any] = field(default_factory=dict, repr=False)
-    errors: dict[str, float] = field(default_factory=dict)
-    collisions: CollisionReport | None = None
+    __slots__ = ("configuration", "cost", "success", "stop_reason", "iterations", "evaluations", "wall_time",
+                 "solver", "settings", "state", "collisions", "_terms", "_task_error", "_errors", "_history",
+                 "_source")
+
+    def __init__(self, configuration: np.ndarray, cost: float, terms: dict[str, float], task_error: float,
+                 success: bool, stop_reason: str, iterations: int, evaluations: int, wall_time: float,
+                 history: np.ndarray, solver: str, settings: dict[str, Any] | None = None,
+                 state: dict[str, Any] | None = None, errors: dict[str, float] | None = None,
+                 collisions: CollisionReport | None = None) -> None:
+        self.configuration, self.cost, self.success, self.stop_reason = configuration, cost, success, stop_reason
+        self.iterations, self.evaluations, self.wall_time, self.solver = iterations, evaluations, wall_time, solver
+        self.settings = {} if settings is None else settings
+        self.state = {} if state is None else state
+        self.collisions = collisions
+        self._terms, self._task_error, self._history = terms, task_error, history
+        self._errors = {} if errors is None else errors
+        self._source = None
+
+    @classmethod
+    def _of_solve(cls, configuration: np.ndarray, cost: float, success: bool, stop_reason: str, iterations: int,
+                  evaluations: int, wall_time: float, solver: str, settings: dict[str, Any], state: dict[str, Any],
+                  collisions: CollisionReport | None, source: tuple) -> IKResult:
+        """A result whose tables are made on first read from ``source``: ``(program, term values (list, term
+        order), task block errors (list, block order), history or None)``."""
+        made = cls.__new__(cls)
+        made.configuration, made.cost, made.success, made.stop_reason = configuration, cost, success, stop_reason
+        made.iterations, made.evaluations, made.wall_time, made.solver = iterations, evaluations, wall_time, solver
+        made.settings, made.state, made.collisions = settings, state, collisions
+        made._terms = made._task_error = made._errors = made._history = None
+        made._source = source
+        return made
+
+    def _make(self) -> None:
+        program, values, errors, history = self._source
+        layout = program.layout
+        self._terms = dict(zip(layout.names, values))
+        self._task_error = sum([values[k] for k in layout.task_terms])
+        self._errors = program.named_errors(errors)
+        self._history = np.array([self.cost]) if history is None else np.asarray(history, dtype=float)
+        self._source = None
+
+    @property
+    def terms(self) -> dict[str, float]:
+        if self._source is not None:
+            self._make()
+        return self._terms
+
+    @property
+    def task_error(self) -> float:
+        if self._source is not None:
+            self._make()
+        return self._task_error
+
+    @property
+    def errors(self) -> dict[str, float]:
+        if self._source is not None:
+            self._make()
+        return self._errors
+
+    @property
+    def history(self) -> np.ndarray:
+        if self._source is not None:
+            self._make()
+        return self._history
+
+    def __getstate__(self) -> dict[str, Any]:
+        if self._source is not None:
+            self._make()
+        return {name: getattr(self, name) for name in self.__slots__}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        for name, value in state.items():
+            object.__setattr__(self, name, value)
+
+    def __repr__(self) -> str:
+        shown = ("configuration", "cost", "terms", "task_error", "success", "stop_reason", "iterations",
+                 "evaluations", "wall_time", "solver", "errors", "collisions")
+        return f"IKResult({', '.join(f'{name}={getattr(self, name)!r}' for name in shown)})"
 
 
 def solve(
@@ -211,21 +276,6 @@ def _result(problem: Problem, outcome, solver: str, request: Request, start: flo
     success = outcome.stop_reason != "interrupted" and program.within(
         error_list, request.tolerance, request.angle_tolerance, exact_checked=collisions is not None) \
         and (collisions is None or not collisions.colliding)
-    layout = program.layout
-    return IKResult(
-        configuration=x,
-        cost=cost,
-        terms=dict(zip(layout.names, value_list)),
-        task_error=sum([value_list[k] for k in layout.task_terms]),
-        success=success,
-        stop_reason=outcome.stop_reason,
-        iterations=int(outcome.iterations),
-        evaluations=int(outcome.evaluations),
-        wall_time=time.perf_counter() - start,
-        history=np.array([cost]) if outcome.history is None else np.asarray(outcome.history, dtype=float),
-        solver=solver,
-        settings=outcome.settings,
-        state=outcome.state,
-        errors=program.named_errors(error_list),
-        collisions=collisions,
-    )
+    return IKResult._of_solve(x, cost, success, outcome.stop_reason, int(outcome.iterations),
+                              int(outcome.evaluations), time.perf_counter() - start, solver, outcome.settings,
+                              outcome.state, collisions, (program, value_list, error_list, outcome.history))

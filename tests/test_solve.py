@@ -65,6 +65,25 @@ def test_result_reports_every_term(problem):
     assert np.all(result.configuration >= problem.robot.lower) and np.all(result.configuration <= problem.robot.upper)
 
 
+def test_result_tables_made_on_first_read_match_the_problem_and_survive_pickling(problem):
+    """``terms``, ``errors``, ``task_error`` and ``history`` are made when first read: they equal the problem's
+    own evaluation at the answer, and a pickled result (as a Dask worker returns it) carries them made."""
+    import pickle
+
+    result = solve(problem, "hybrid", seed=0)
+    x = result.configuration
+    values = problem.values(x[None])[0]
+    copied = pickle.loads(pickle.dumps(result))  # pickled before any table was read
+    for r in (copied, result):
+        assert r.terms == pytest.approx(dict(zip(problem.names, values)), rel=1e-9, abs=1e-15)
+        assert r.errors == pytest.approx(problem.errors(x), rel=1e-9, abs=1e-15)
+        assert r.task_error == pytest.approx(values[problem.task_mask].sum(), rel=1e-9, abs=1e-15)
+        assert r.cost == pytest.approx(float(problem.cost(x[None])[0]), rel=1e-12)
+        np.testing.assert_array_equal(r.history, [r.cost])  # the hybrid's engine alone: no generations
+        assert r.success == result.success and r.settings == result.settings
+    assert "terms=" in repr(result) and "errors=" in repr(result)
+
+
 def test_cmaes_reaches_the_target_and_the_hybrid_matches_it_with_fewer_evaluations(problem):
     cma = solve(problem, "cmaes_fast", seed=1, max_iterations=1000)  # the paper's budget: 1e-15 to 1e-14 m
     hybrid = solve(problem, "hybrid", seed=1)
