@@ -111,8 +111,34 @@ class Hybrid(IKSolver):
         x0, start = start_configuration(problem, request, o.warm_start)
         budget = default_iterations(request)
         settings = local_settings(request, o, budget)
-        counter = _Counter(problem, request)
         draws = stream(request.seed)  # the engine's restarts, one stream through every phase
+        first = settings if start == "middle" or not o.restarts else _in_basin(settings)
+        opening = None
+        if not (problem.checks_collisions or o.global_iterations or request.callback):
+            # the common case: the engine from the start; it is the answer when it reaches the task and the
+            # weighted sum does not decide (priorities, or no regularizers: no multipliers to weigh)
+            opening = solve_local(problem.program, x0, draws, first, deadline=request.deadline)
+            if opening.reached and (problem.priorities or opening.multipliers is None):
+                return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,
+                               self._report(start, budget, opening.restarts, opening.regularized, request),
+                               task_errors=opening.task_errors, values=opening.values)
+        return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
+
+    def _report(self, start: str, budget: int, restarts: int, regularized: str | None, request: Request, *,
+                escalated: bool = False, weighted: bool = False, hull_runs: int = 0, on_hulls: bool = False,
+                clear_first: bool = False) -> dict[str, Any]:
+        """The settings a result reports: the options and how the solve went."""
+        return {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
+                "restart_count": restarts, "regularized": regularized, "weighted": weighted,
+                "hull_runs": hull_runs, "on_hulls": on_hulls, "clear_first": clear_first,
+                "population": request.population}
+
+    def _search(self, problem, request: Request, x0: np.ndarray, start: str, budget: int, settings: LocalSettings,
+                first: LocalSettings, draws: np.ndarray, opening: LocalResult | None) -> Outcome:
+        """Every phase of the module's list; ``opening``: the engine's run from ``x0`` with ``first`` when
+        :meth:`solve` made it already (the whole solve when no collision term, global phase or callback)."""
+        o = self.options
+        counter = _Counter(problem, request)
         iterations = evaluations = restarts = 0
         history: list[float] = []
 
@@ -175,7 +201,6 @@ class Hybrid(IKSolver):
             return whole, report, True
 
         escalated, check, best = False, None, None
-        first = settings if start == "middle" or not o.restarts else _in_basin(settings)
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
         loose = problem.checks_collisions and not o.global_iterations and problem.priorities \
@@ -187,7 +212,10 @@ class Hybrid(IKSolver):
             # to leave it), then random restarts (that basin was searched: the first is drawn too). A basin that
             # misses the task without the collision terms misses it with them: then straight to the restarts
             skip = not met and first is not settings and request.time_left() > 0
-            best = None if skip else hulls(engine(x0, first))
+            if opening is not None:  # made by solve(): counted as engine() counts its runs
+                iterations, evaluations, restarts = opening.iterations, opening.evaluations, opening.restarts
+                counter.report(opening.x)
+            best = None if skip else hulls(engine(x0, first) if opening is None else opening)
             if best is None or (not best.reached and first is not settings and request.time_left() > 0):
                 found, check, _ = clear_first(None, settings) if loose else (None, None, False)  # drawn, as below
                 best = found if found is not None else better(best, hulls(engine(None)))  # a drawn start
@@ -213,11 +241,9 @@ class Hybrid(IKSolver):
             x, errors, values = points[int(np.argmin(problem.cost(np.array(points))))], None, None
             counter.report(x)
         stop = stop_reason(within(problem, x, request) if errors is None else best.reached, request)
-        report = {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
-                  "restart_count": restarts, "regularized": best.regularized, "weighted": weighted,
-                  "hull_runs": len(hull_runs), "on_hulls": any(best is r for r in hull_runs),
-                  "clear_first": check is not None,
-                  "population": request.population}
+        report = self._report(start, budget, restarts, best.regularized, request, escalated=escalated,
+                              weighted=weighted, hull_runs=len(hull_runs),
+                              on_hulls=any(best is r for r in hull_runs), clear_first=check is not None)
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values, collisions=check)  # check: made at x, when made
 
