@@ -81,18 +81,18 @@ class Problem:
 
     def __post_init__(self) -> None:
         objective = Objective.of(self.objective)
-        if len(objective) == 0:
+        if not objective.terms:
             raise TaskError("a problem needs an objective of at least one cost term")
         if self.bounds not in BOUNDS:
             raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")
         if not isinstance(self.priorities, bool):
             raise TaskError(f"priorities must be true or false; got {self.priorities!r}")
-        if self.bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in objective):
+        if self.bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in objective.terms):
             from .costs import JointLimitPenalty
 
             objective = objective + JointLimitPenalty()
         checks = False
-        for _, term in objective:
+        for _, term in objective.terms:
             term.validate(self.robot)
             checks = checks or term.checks_collisions
         object.__setattr__(self, "objective", objective)

@@ -128,6 +128,10 @@ def test_composition_adds_weighted_terms_exactly(robot, rng):
     assert sum([t1, t2]).terms == (1.0 * t1 + t2).terms  # sum() works as well
     assert [w for w, _ in 2 * (t1 + 0.5 * t2)] == [2.0, 1.0]
 
+    program = Program(robot, problem.objective)
+    assert program.terms == (t1, t2, m0, m1) and program.weight_list == (1.2, 1.2, 0.1, 0.4)
+    empty = Program(robot, fw.Objective(()))  # what is left of a task of collision terms alone (hull steps)
+    assert empty.terms == () and empty.task_rows == 0
 
 def all_terms(robot, rotation_seed: int) -> list:
     """One term of every standard kind (task terms, L2 and L1 motion, the limit penalty)."""

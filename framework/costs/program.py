@@ -189,9 +189,9 @@ class Program:
 
     def __init__(self, robot: Robot, objective: Objective):
         self.robot = robot
-        self.terms: tuple[Term, ...] = tuple([t for _, t in objective])
-        weights = self.weight_list = tuple([w for w, _ in objective])  # floats (``Objective`` checked them)
-        terms = self.terms
+        weights, terms = zip(*objective.terms) if objective.terms else ((), ())  # floats (``Objective`` checked)
+        self.terms: tuple[Term, ...] = terms
+        self.weight_list: tuple[float, ...] = weights
         key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
         layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
         self.layout = layout
