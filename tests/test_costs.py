@@ -344,7 +344,7 @@ def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
                 Orientation("arm2_ee", robot.frame_placement(y, "arm2_ee").rotation),
                 fw.RelativePose("arm1_ee", "arm2_ee", robot.frame_placement(y, "arm1_ee").actInv(
                     robot.frame_placement(y, "arm2_ee"))),
-                Motion("base", y[:3])]
+                Motion("base", y[:3]), Motion("arm1", y, norm="l1"), fw.JointTarget("arm2", y)]
 
     moved = terms(1)
     problem = Problem(robot, sum(moved[1:], moved[0]))
@@ -352,7 +352,8 @@ def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
     fresh = terms(2)
     for term, new in zip(moved, fresh):
         target = {fw.Position: lambda t: t.target, fw.Pose: lambda t: t.target, Orientation: lambda t: t.target,
-                  fw.RelativePose: lambda t: (t.position, t.rotation), Motion: lambda t: t.previous}[type(new)](new)
+                  fw.RelativePose: lambda t: (t.position, t.rotation), Motion: lambda t: t.previous,
+                  fw.JointTarget: lambda t: t.previous}[type(new)](new)
         term.set_target(target)
     built = Problem(robot, sum(fresh[1:], fresh[0]))
     np.testing.assert_array_equal(problem.cost(X), built.cost(X))

@@ -62,6 +62,11 @@ class Motion(Term):
     def validate(self, robot: Robot) -> None:
         self.previous_values(robot)
 
+    def parameters(self, robot: Robot) -> np.ndarray:
+        """The block's parameters, the previous values (read without building the block: a path moves them at
+        every waypoint)."""
+        return self.previous_values(robot)
+
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         idx = self.indices(robot)
         if self.norm == "l2":
