@@ -180,12 +180,11 @@ def _warm_start(
     """Warm-start points ``(k, n)`` (or ``None``: cold) and solver options for waypoint ``k`` (see :func:`track`);
     ``carry``: the solver continues its search distribution, ``state``: the previous solve's
     :attr:`~framework.solve.IKResult.state` (empty at the first waypoint)."""
-    defaults = method.option_names
     if not warm_start:  # a local solver would otherwise start from the motion terms' previous configuration
-        return None, ({"warm_start": False, **options} if "warm_start" in defaults else options)
+        return None, ({"warm_start": False, **options} if "warm_start" in method.option_names else options)
     seeds = [predictor(problem, previous), previous] if predict else [previous]
     if k == 0:  # the first waypoint may be far from the initial configuration: the solver's own spread
-        if "global_iterations" in defaults:  # and a global phase where the solver has one
+        if "global_iterations" in method.option_names:  # and a global phase where the solver has one
             return np.array(seeds), {"global_iterations": FIRST_GLOBAL_ITERATIONS, **options}
         covariance = task_covariance(problem, seeds[0]) if carry else None
         if covariance is not None:  # CMA-ES from the prediction, along the task's null space first
