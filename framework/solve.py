@@ -30,6 +30,21 @@ DEFAULT_SOLVER = "hybrid"
 DEFAULT_TOLERANCE = 1e-6
 
 
+class _MadeOnRead:
+    """A table of :class:`IKResult` made from the solve's numbers the first time it is read (kept in the slot
+    named like it with a leading underscore)."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.slot = "_" + name
+
+    def __get__(self, result: IKResult | None, owner: type | None = None) -> Any:
+        if result is None:
+            return self
+        if result._source is not None:
+            result._make()
+        return getattr(result, self.slot)
+
+
 class IKResult:
     """What one IK solve produced.
 
@@ -86,11 +101,8 @@ class IKResult:
                   collisions: CollisionReport | None, source: tuple) -> IKResult:
         """A result whose tables are made on first read from ``source``: ``(program, term values (list, term
         order), task block errors (list, block order), history or None)``."""
-        made = cls.__new__(cls)
-        made.configuration, made.cost, made.success, made.stop_reason = configuration, cost, success, stop_reason
-        made.iterations, made.evaluations, made.wall_time, made.solver = iterations, evaluations, wall_time, solver
-        made.settings, made.state, made.collisions = settings, state, collisions
-        made._terms = made._task_error = made._errors = made._history = None
+        made = cls(configuration, cost, None, None, success, stop_reason, iterations, evaluations, wall_time, None,
+                   solver, settings, state, None, collisions)
         made._source = source
         return made
 
@@ -103,29 +115,10 @@ class IKResult:
         self._history = np.array([self.cost]) if history is None else np.asarray(history, dtype=float)
         self._source = None
 
-    @property
-    def terms(self) -> dict[str, float]:
-        if self._source is not None:
-            self._make()
-        return self._terms
-
-    @property
-    def task_error(self) -> float:
-        if self._source is not None:
-            self._make()
-        return self._task_error
-
-    @property
-    def errors(self) -> dict[str, float]:
-        if self._source is not None:
-            self._make()
-        return self._errors
-
-    @property
-    def history(self) -> np.ndarray:
-        if self._source is not None:
-            self._make()
-        return self._history
+    terms = _MadeOnRead()
+    task_error = _MadeOnRead()
+    errors = _MadeOnRead()
+    history = _MadeOnRead()
 
     def __getstate__(self) -> dict[str, Any]:
         if self._source is not None:
