@@ -12,6 +12,11 @@ step enters one and is rejected, the step is solved again holding that row with 
 (a *blocking* row: without it, the step would enter the contact again at every halving). A collision row is the
 smallest distance over sphere pairs, with a Jacobian that jumps where the closest pair changes: after
 :data:`KINK_FAILURES` failed iterations in a row with a one-sided row held, the phase stops.
+A norm regularizer at its kink (a joint group at rest: ``‖r‖`` below :data:`HOLD_BELOW`) is an active set of its
+own: held at zero as equality rows (out of ``G``'s derivatives) while its multiplier stays within the norm's
+slope ``w s`` (the subgradient condition of an optimum at zero), else moved off zero against the multiplier and
+left free. The first step gives norms shorter than its trust radius their majorizing curvature (a Newton step on
+a norm's own ray is unbounded, and a first step past zero failed its halvings).
 
 :func:`weighted_newton` — the weighted sum ``Σ w ρ(r)`` of every term as it stands, for objectives where
 reaching the task costs more than it gains (the papers' weighted objectives with small task weights): damped
@@ -48,15 +53,28 @@ RESTORE_STEPS, LINE_SEARCH = 4, 4
 RESTORE_DAMPING = 1e-14
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
+#: A norm regularizer (``ρ = s‖r‖``) shorter than this [its residual's unit: rad or m] is held at zero as a
+#: constraint of the Newton phase (its kink: smoothed, Newton steps stall there with the norm at ~1e-7).
+HOLD_BELOW = 1e-5
+#: ``−δ`` on the diagonal of the held norms' rows in the step's system: a least-squares hold where they are
+#: redundant with the task rows (far below any curvature of the problem); their right-hand side carries
+#: ``δλ`` of the last multipliers (the proximal method of multipliers), so the hold is exact once they settle.
+HELD_DAMPING = 1e-9
+#: How far a held norm is moved off zero, against its multiplier, when the multiplier says leaving zero pays.
+KICK = 1e-5
+#: States of a regularizer block in the Newton phase: free, held at zero, kicked off it (one step), released
+#: (left free for the rest of the phase).
+FREE, HELD, KICKED, RELEASED = 0, 1, 2, 3
 
 
 @numba.njit(cache=True)
 def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu,
-                          majorize_below) -> float:
+                          majorize_below, skip) -> float:
     """Weighted value, gradient ``g (n,)`` and Hessian ``H (n, n)`` of the blocks of ``level`` (``< 0``: all
     levels 1 and 2) from the residual rows in ``ws``; ``curvature`` adds their second-order kinematics.
     ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block; norms shorter
-    than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``)."""
+    than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``); blocks ``b`` with
+    ``skip[b] != 0`` are left out (norms held at zero as constraints)."""
     bint, bflt, params = prog[0], prog[1], prog[2]
     out, Jf, r, Jr = ws[0], ws[2], ws[3], ws[4]
     n = g.shape[0]
@@ -68,6 +86,9 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
             continue
         rows, w = bint[b, ROWS], bflt[b, WEIGHT]
+        if skip[b] != 0:
+            row += rows
+            continue
         rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr, majorize_below)
         value += w * rho_value(bint[b, RHO], bflt[b, SCALE], r, row, rows)
         for i in range(n):
@@ -207,6 +228,106 @@ def _moved(x, xt, box_wrap, blocking, Jb, cb, delta) -> None:
 
 
 @numba.njit(cache=True)
+def _regularizer_rows(prog, first) -> None:
+    """``first[b]``: block ``b``'s first row among the regularizer rows (``-1``: not a regularizer)."""
+    bint = prog[0]
+    row = 0
+    for b in range(bint.shape[0]):
+        first[b] = -1
+        if bint[b, LEVEL] == 2:
+            first[b] = row
+            row += bint[b, ROWS]
+
+
+@numba.njit(cache=True)
+def _update_holds(prog, r_reg, first, state, lam, m, target, skip) -> bool:
+    """Hold the free norm regularizers shorter than :data:`HOLD_BELOW` at zero, and kick the held ones whose
+    multipliers ``lam[m + row]`` exceed the norm's slope ``w s`` (then leaving zero lowers the sum: moved
+    :data:`KICK` against the multiplier, ``target``); ``skip`` follows the states. Returns whether a state
+    changed."""
+    bint, bflt = prog[0], prog[1]
+    changed = False
+    for b in range(bint.shape[0]):
+        f = first[b]
+        if f < 0 or bint[b, RHO] != NORM:
+            continue
+        rows = bint[b, ROWS]
+        if state[b] == FREE and np.sqrt(squared_norm(r_reg[f:], rows)) < HOLD_BELOW:
+            state[b] = HELD
+            changed = True
+            for c in range(rows):
+                lam[m + f + c], target[f + c] = 0.0, 0.0
+        elif state[b] == HELD:
+            norm = np.sqrt(squared_norm(lam[m + f:], rows))
+            if norm > bflt[b, WEIGHT] * bflt[b, SCALE] * (1.0 + 1e-9):
+                state[b] = KICKED
+                changed = True
+                for c in range(rows):
+                    target[f + c] = -KICK * lam[m + f + c] / norm
+    for b in range(bint.shape[0]):
+        skip[b] = 1 if state[b] == HELD or state[b] == KICKED else 0
+    return changed
+
+
+@numba.njit(cache=True)
+def _release_holds(state, skip) -> None:
+    """Every held or kicked regularizer released (for the rest of the phase)."""
+    for b in range(state.shape[0]):
+        if state[b] == HELD or state[b] == KICKED:
+            state[b] = RELEASED
+        skip[b] = 0
+
+
+@numba.njit(cache=True)
+def _held_rows(prog, first, state, J_reg, n, m, arow, Aa, ma) -> int:
+    """The held and kicked regularizers' rows appended to the active rows (``arow`` entries ``m + row``, their
+    Jacobian rows into ``Aa`` from ``ma`` on); returns the new count."""
+    bint = prog[0]
+    for b in range(bint.shape[0]):
+        if state[b] != HELD and state[b] != KICKED:
+            continue
+        f = first[b]
+        for c in range(bint[b, ROWS]):
+            arow[ma] = m + f + c
+            for i in range(n):
+                Aa[ma, i] = J_reg[f + c, i]
+            ma += 1
+    return ma
+
+
+@numba.njit(cache=True)
+def _moving_rows(Aa, arow, fidx, nf, mr, ma) -> int:
+    """The held regularizers' rows ``mr:ma`` of ``Aa`` kept only where they move a free coordinate ``fidx[:nf]``
+    (a coordinate at its bound holds its own motion at zero: its row would make the step's system singular);
+    returns the new count."""
+    k = mr
+    for a in range(mr, ma):
+        moving = False
+        for c in range(nf):
+            if Aa[a, fidx[c]] != 0.0:
+                moving = True
+                break
+        if moving:
+            if k != a:
+                arow[k] = arow[a]
+                Aa[k, :] = Aa[a, :]
+            k += 1
+    return k
+
+
+@numba.njit(cache=True)
+def _kick_due(prog, first, state, lam, m) -> bool:
+    """Whether a held regularizer's multiplier ``lam[m + row]`` exceeds its norm's slope (see
+    :func:`_update_holds`)."""
+    bint, bflt = prog[0], prog[1]
+    for b in range(bint.shape[0]):
+        if state[b] == HELD and np.sqrt(squared_norm(lam[m + first[b]:], bint[b, ROWS])) > \
+                bflt[b, WEIGHT] * bflt[b, SCALE] * (1.0 + 1e-9):
+            return True
+    return False
+
+
+@numba.njit(cache=True)
 def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
                errors, values, stats) -> int:
     """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
@@ -230,13 +351,18 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     chain_ptr, chain_idx = prog[5], prog[6]
     own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
     big = _max_rows(prog)
+    mq = m + q  # task rows, then regularizer rows (held at zero) in the active set
     own = (np.empty(q), np.zeros((q, n)), np.empty(q), np.zeros((q, n)), np.empty(n), np.empty((n, n)),
-           np.empty((m, m)), np.empty((m, m)), np.empty(max(m, n)), np.empty(n), np.zeros(m), np.zeros(m),
-           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + m, n + m)), np.empty((n + m, n + m + 1)),
-           np.empty(n + m), np.empty(n + m), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
-           np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(m, dtype=np.int64), np.empty((m, n)),
-           np.zeros(m), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
+           np.empty((mq, mq)), np.empty((mq, mq)), np.empty(max(mq, n)), np.empty(n), np.zeros(mq), np.zeros(mq),
+           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + mq, n + mq)), np.empty((n + mq, n + mq + 1)),
+           np.empty(n + mq), np.empty(n + mq), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
+           np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(mq, dtype=np.int64), np.empty((mq, n)),
+           np.zeros(mq), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
            np.zeros(m), np.empty(n))
+    nb = prog[0].shape[0]
+    first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
+    skip, target = np.zeros(nb, dtype=np.int8), np.zeros(q)  # blocks out of G's derivatives; kicked norms' aims
+    _regularizer_rows(prog, first)
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
     tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
@@ -258,22 +384,24 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     feasible = max(np.sqrt(squared_norm(cur[3], m)), 1e-13)
     G = level_value(REGULARIZERS, prog, cur_r[3], YES)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                          0.0)
+                          TRUST_START, skip)  # norms shorter than the first trust radius: moved to, not past, zero
     ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
     _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
     mu, trust, last_step = MU_START, TRUST_START, 0.0
     status, iterations, accepted = ITERATIONS, 0, 0
-    bint = prog[0]
+    bint, bflt = prog[0], prog[1]
     unblocked, failed = False, 0
     while iterations < max_iterations:
         if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
             status = DEADLINE
             break
         iterations += 1
+        if _update_holds(prog, cur_r[3], first, state, lam, m, target, skip):
+            fresh = False  # G's derivatives without the held norms
         if not fresh:  # a norm shorter than the last step gets its majorizing curvature
             objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                                  2.0 * last_step)
+                                  2.0 * last_step, skip)
             fresh = True
         ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, True)
         own_rows = ma  # rows held with their own Jacobian at x; the blocking rows follow them
@@ -291,9 +419,15 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 Aa[ma, i] = Jb[a, i]
             held_now[a] = True
             ma += 1
+        mr = ma  # the task's rows (own and blocking); the held regularizers' rows follow them
+        ma = _held_rows(prog, first, state, cur_r[4], n, m, arow, Aa, ma)
         for a in range(m):  # released and clear rows carry no multiplier
             if not held_now[a]:
                 lam[a] = 0.0
+        for b in range(nb):
+            if first[b] >= 0 and skip[b] == 0:
+                for c in range(bint[b, ROWS]):
+                    lam[m + first[b] + c] = 0.0
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
             s = g[i]
             for a in range(ma):
@@ -304,7 +438,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if not held(x[i], lower[i], upper[i], box_wrap[i], -gl[i]):
                 fidx[nf] = i
                 nf += 1
-        if nf <= ma:
+        ma = _moving_rows(Aa, arow, fidx, nf, mr, ma)
+        if nf <= mr:  # (held norms may be redundant with the task: their rows are solved in least squares)
+            if ma > mr:  # no freedom left with the held regularizers: let them go
+                _release_holds(state, skip)
+                fresh = False
+                continue
             if ma > own_rows:  # held by the blocking rows (linearized at trial points): backtrack without them
                 blocking[:] = False
                 unblocked = True
@@ -327,6 +466,17 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 block_curvature(b, lam_neg[row:], cur[0], cur[2], bint, prog[2], prog[3], chain_ptr, chain_idx, cur[3],
                                 row, Hlb)
             row += rows
+        extra = 0.0  # what the step gains on the held norms (out of gl: taken to zero), or inf for a kick
+        for b in range(nb):
+            if skip[b] == 0:
+                continue
+            f = first[b]
+            for c in range(bint[b, ROWS]):
+                lam_neg[m + f + c] = -lam[m + f + c]
+            block_curvature(b, lam_neg[m + f:], cur[0], cur[2], bint, prog[2], prog[3], chain_ptr, chain_idx,
+                            cur_r[3], f, Hlb)
+            extra += np.inf if state[b] == KICKED else \
+                bflt[b, WEIGHT] * bflt[b, SCALE] * np.sqrt(squared_norm(cur_r[3][f:], bint[b, ROWS]))
         for a in range(nf):
             i = fidx[a]
             for c in range(nf):
@@ -339,9 +489,16 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         for a in range(ma):
             for c in range(ma):
                 Kv[nf + a, nf + c] = 0.0
-            rv[nf + a] = -cur[3][arow[a]] if a < own_rows else -cb[arow[a]]
+            if a >= mr:  # a held norm's rows, regularized: with the task they may be redundant (a joint group
+                Kv[nf + a, nf + a] = -HELD_DAMPING  # at rest leaves the rest of the task to fewer coordinates)
+            if a < own_rows:
+                rv[nf + a] = -cur[3][arow[a]]
+            elif a < mr:
+                rv[nf + a] = -cb[arow[a]]
+            else:  # a held norm to zero, a kicked one to its aim (+ δλ: exactly there once λ settles)
+                rv[nf + a] = target[arow[a] - m] - cur_r[3][arow[a] - m] + HELD_DAMPING * lam[arow[a]]
         if not lu_solve(Kv, rv, Mv, sv):
-            if ma > own_rows:  # the blocking rows' Jacobians (from trial points) made it singular: let them go,
+            if mr > own_rows:  # the blocking rows' Jacobians (from trial points) made it singular: let them go,
                 blocking[:] = False  # and backtrack without them until a step is taken
                 unblocked = True
                 continue
@@ -361,8 +518,14 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             predicted -= gl[i] * dx[i]
         if step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
             predicted *= trust / step
+        predicted += extra
         if step < 1e-12 or predicted < 1e-15 * (1.0 + abs(G)):  # no step, or below what G can resolve
-            if ma > own_rows:  # stopped by the blocking rows: backtrack without them
+            if ma > mr:  # at rest with norms held at zero: kick those whose multipliers say leaving pays
+                for a in range(mr, ma):
+                    lam[arow[a]] = -sv[nf + a]
+                if _kick_due(prog, first, state, lam, m):
+                    continue
+            if mr > own_rows:  # stopped by the blocking rows: backtrack without them
                 blocking[:] = False
                 unblocked = True
                 continue
@@ -400,26 +563,29 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             unblocked = False
             failed = 0
             G = Gt
-            for a in range(m):
+            for a in range(mq):
                 lam[a] = 0.0
             for a in range(ma):
                 lam[arow[a]] = -sv[nf + a]
             accepted += 1
             fresh = False
             last_step = alpha * step
+            for b in range(nb):
+                if state[b] == KICKED:  # off zero along its multiplier: free from here (no majorizing curvature)
+                    state[b], skip[b], last_step = RELEASED, 0, 0.0
             if alpha == 1.0:
                 mu = max(mu * 0.1, MU_MIN)
                 trust = min(2.0 * trust, TRUST_MAX)
             else:
                 trust = max(alpha * step, 1e-12)
-            if alpha * step < 1e-10 or gain <= 1e-16 * (1.0 + abs(G)):
-                status = CONVERGED
+            if (alpha * step < 1e-10 or gain <= 1e-16 * (1.0 + abs(G))) and not _kick_due(prog, first, state, lam, m):
+                status = CONVERGED  # (a held norm whose multiplier says leaving zero pays: kicked next)
                 break
         elif entered:
             for a in range(m):  # the candidates written by _entered become blocking rows
                 if not held_now[a] and sb[a] != 0.0:
                     blocking[a] = True
-        elif ma > own_rows:  # no step along the blocking rows (linearized at trial points): backtrack without them
+        elif mr > own_rows:  # no step along the blocking rows (linearized at trial points): backtrack without them
             blocking[:] = False
             unblocked = True
         else:
@@ -427,7 +593,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             mu *= 10.0
             failed += 1
             kinked = False
-            for c in range(ma):
+            for c in range(mr):
                 kinked = kinked or hinge[arow[c]]
             if mu > MU_MAX or trust < 1e-12 or (kinked and failed >= KINK_FAILURES):
                 status = STALLED
@@ -436,9 +602,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
              RESTORE_STEPS, 0.0)  # to the last bit
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                          0.0)
+                          0.0, skip)
     ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
-    _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, multipliers)
+    ma = _held_rows(prog, first, state, cur_r[4], n, m, arow, Aa, ma)  # held norms: constraints, out of ∇G
+    _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, lam)
+    multipliers[:] = lam[:m]
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
@@ -491,8 +659,9 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
     g, H = np.empty(n), np.empty((n, n))
     big = _max_rows(prog)
     gr, Hr, mu_r = np.empty(big), np.empty((big, big)), np.empty(big)
+    every = np.zeros(prog[0].shape[0], dtype=np.int8)  # no block left out
     F = objective_derivatives(TASK_AND_REGULARIZERS, prog, cur, smoothing, YES, g, H, chain_ptr, chain_idx, gr,
-                              Hr, mu_r, 0.0)
+                              Hr, mu_r, 0.0, every)
     Hf, Lf, gf, sf = np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n)
     fidx = np.empty(n, dtype=np.int64)
     xt = np.empty(n)
@@ -506,7 +675,7 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
         iterations += 1
         if not fresh:
             F = objective_derivatives(TASK_AND_REGULARIZERS, prog, cur, smoothing, YES, g, H, chain_ptr, chain_idx, gr,
-                                      Hr, mu_r, 0.0)
+                                      Hr, mu_r, 0.0, every)
             fresh = True
         nf = 0
         for i in range(n):  # the coordinates descent along −g does not push through a bound
@@ -608,6 +777,6 @@ def derivatives_at(x, level, kin, prog, smoothing, curvature):
     big = _max_rows(prog)
     g, H = np.empty(n), np.empty((n, n))
     value = objective_derivatives(level, prog, ws, smoothing, curvature, g, H, prog[5], prog[6], np.empty(big),
-                                  np.empty((big, big)), np.empty(big), 0.0)
+                                  np.empty((big, big)), np.empty(big), 0.0, np.zeros(prog[0].shape[0], dtype=np.int8))
     keep_alive(own)
     return value, g, H
