@@ -133,6 +133,7 @@ def test_composition_adds_weighted_terms_exactly(robot, rng):
     empty = Program(robot, fw.Objective(()))  # what is left of a task of collision terms alone (hull steps)
     assert empty.terms == () and empty.task_rows == 0
 
+
 def all_terms(robot, rotation_seed: int) -> list:
     """One term of every standard kind (task terms, L2 and L1 motion, the limit penalty)."""
     prev = robot.middle

@@ -90,21 +90,27 @@ def test_motion_is_minimized_on_the_task(rng):
     assert np.abs(null @ gradient).max() < 1e-3 * np.abs(gradient).max()
 
 
-def test_a_joint_group_at_rest_is_held_exactly_at_zero_motion():
-    """Both hands' targets shifted by the base alone (1 cm, -4 mm) from q_prev: moving the base costs 0.1 x 1.08
-    cm, moving an arm instead 0.4 x its joint motion (several cm of joint angle for a hand's centimetre), so the
-    optimum keeps both arms exactly at rest — the norms' kink. The answer is that construction to 1e-12 (a
-    smoothed Newton phase stalls at the kink with the arms ~1e-8 from rest and the base ~8e-9 off), its cost no
-    higher, and the phase converged."""
+def _base_shift(base: float, arms: float) -> tuple[Problem, np.ndarray, np.ndarray]:
+    """The dual youBot's two hands at their places after the base alone moved (1 cm, -4 mm) from ``q_prev``, with
+    motion from ``q_prev`` weighted ``base`` and ``arms`` (each arm): ``(problem, q_prev, shifted)``."""
     robot = fw.load_robot("youbot_dual_mobile")
     q_prev = np.array([0, 0, 0.3, -0.5, 1.0, -1.2, 0.8, 0.2, 0.4, 1.1, -1.0, 0.9, -0.3])
     shifted = q_prev.copy()
     shifted[:2] += [0.01, -0.004]
     task = fw.Position("arm1_ee", robot.frame_placement(shifted, "arm1_ee").translation) + \
         fw.Position("arm2_ee", robot.frame_placement(shifted, "arm2_ee").translation)
-    motion = 0.1 * fw.Motion("base", q_prev[:3]) + 0.4 * fw.Motion("arm1", q_prev[3:8]) + \
-        0.4 * fw.Motion("arm2", q_prev[8:])
-    problem = Problem(robot, task + motion)
+    motion = base * fw.Motion("base", q_prev[:3]) + arms * fw.Motion("arm1", q_prev[3:8]) + \
+        arms * fw.Motion("arm2", q_prev[8:])
+    return Problem(robot, task + motion), q_prev, shifted
+
+
+def test_a_joint_group_at_rest_is_held_exactly_at_zero_motion():
+    """Both hands' targets shifted by the base alone (1 cm, -4 mm) from q_prev: moving the base costs 0.1 x 1.08
+    cm, moving an arm instead 0.4 x its joint motion (several cm of joint angle for a hand's centimetre), so the
+    optimum keeps both arms exactly at rest — the norms' kink. The answer is that construction to 1e-12 (a
+    smoothed Newton phase stalls at the kink with the arms ~1e-8 from rest and the base ~8e-9 off), its cost no
+    higher, and the phase converged."""
+    problem, q_prev, shifted = _base_shift(base=0.1, arms=0.4)
     result = fw.solve(problem, initial=q_prev, tolerance=1e-12)
     assert result.success and result.settings["regularized"] == "converged"
     assert np.abs(result.configuration - shifted).max() < 1e-12
@@ -118,15 +124,7 @@ def test_a_group_held_at_rest_leaves_it_when_its_multiplier_says_so():
     the arms moving). The held arms' multipliers exceed their norms' slope, so they are moved off zero: the answer
     costs 10x less than the start and the same (to 1e-12) as the answer from q_prev, reached without holds at the
     start (a smoothed Newton phase stays at the start, at 1.08e-2)."""
-    robot = fw.load_robot("youbot_dual_mobile")
-    q_prev = np.array([0, 0, 0.3, -0.5, 1.0, -1.2, 0.8, 0.2, 0.4, 1.1, -1.0, 0.9, -0.3])
-    shifted = q_prev.copy()
-    shifted[:2] += [0.01, -0.004]
-    task = fw.Position("arm1_ee", robot.frame_placement(shifted, "arm1_ee").translation) + \
-        fw.Position("arm2_ee", robot.frame_placement(shifted, "arm2_ee").translation)
-    motion = 1.0 * fw.Motion("base", q_prev[:3]) + 0.01 * fw.Motion("arm1", q_prev[3:8]) + \
-        0.01 * fw.Motion("arm2", q_prev[8:])
-    problem = Problem(robot, task + motion)
+    problem, q_prev, shifted = _base_shift(base=1.0, arms=0.01)
     held = fw.solve(problem, initial=shifted, tolerance=1e-12)
     free = fw.solve(problem, initial=q_prev, tolerance=1e-12)
     assert held.success and free.success

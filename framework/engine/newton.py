@@ -67,14 +67,20 @@ KICK = 1e-5
 FREE, HELD, KICKED, RELEASED = 0, 1, 2, 3
 
 
+@numba.njit(cache=True, inline="always")
+def _is_held(state) -> bool:
+    """Whether a regularizer in this state is a constraint of the step (held at zero, or kicked off it)."""
+    return state == HELD or state == KICKED
+
+
 @numba.njit(cache=True)
 def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr, chain_idx, gr, Hr, mu,
-                          majorize_below, skip) -> float:
+                          majorize_below, states) -> float:
     """Weighted value, gradient ``g (n,)`` and Hessian ``H (n, n)`` of the blocks of ``level`` (``< 0``: all
     levels 1 and 2) from the residual rows in ``ws``; ``curvature`` adds their second-order kinematics.
     ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block; norms shorter
-    than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``); blocks ``b`` with
-    ``skip[b] != 0`` are left out (norms held at zero as constraints)."""
+    than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``); blocks ``b`` whose
+    ``states[b]`` is ``HELD`` or ``KICKED`` are left out (norms held at zero as constraints; zeros: none)."""
     bint, bflt, params = prog[0], prog[1], prog[2]
     out, Jf, r, Jr = ws[0], ws[2], ws[3], ws[4]
     n = g.shape[0]
@@ -86,7 +92,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
         if (level >= 0 and lv != level) or (level < 0 and lv == 0):
             continue
         rows, w = bint[b, ROWS], bflt[b, WEIGHT]
-        if skip[b] != 0:
+        if _is_held(states[b]):
             row += rows
             continue
         rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr, majorize_below)
@@ -240,12 +246,11 @@ def _regularizer_rows(prog, first) -> None:
 
 
 @numba.njit(cache=True)
-def _update_holds(prog, r_reg, first, state, lam, m, target, skip) -> bool:
+def _update_holds(prog, r_reg, first, state, lam, m, target) -> bool:
     """Hold the free norm regularizers shorter than :data:`HOLD_BELOW` at zero, and kick the held ones whose
-    multipliers ``lam[m + row]`` exceed the norm's slope ``w s`` (then leaving zero lowers the sum: moved
-    :data:`KICK` against the multiplier, ``target``); ``skip`` follows the states. Returns whether a state
-    changed."""
-    bint, bflt = prog[0], prog[1]
+    multipliers ``lam[m + row]`` exceed the norm's slope (:func:`_leaving_pays`: moved :data:`KICK` against the
+    multiplier, ``target``). Returns whether a state changed."""
+    bint = prog[0]
     changed = False
     for b in range(bint.shape[0]):
         f = first[b]
@@ -258,24 +263,21 @@ def _update_holds(prog, r_reg, first, state, lam, m, target, skip) -> bool:
             for c in range(rows):
                 lam[m + f + c], target[f + c] = 0.0, 0.0
         elif state[b] == HELD:
-            norm = np.sqrt(squared_norm(lam[m + f:], rows))
-            if norm > bflt[b, WEIGHT] * bflt[b, SCALE] * (1.0 + 1e-9):
+            norm = _leaving_pays(prog, b, lam, m + f)
+            if norm > 0.0:
                 state[b] = KICKED
                 changed = True
                 for c in range(rows):
                     target[f + c] = -KICK * lam[m + f + c] / norm
-    for b in range(bint.shape[0]):
-        skip[b] = 1 if state[b] == HELD or state[b] == KICKED else 0
     return changed
 
 
 @numba.njit(cache=True)
-def _release_holds(state, skip) -> None:
+def _release_holds(state) -> None:
     """Every held or kicked regularizer released (for the rest of the phase)."""
     for b in range(state.shape[0]):
-        if state[b] == HELD or state[b] == KICKED:
+        if _is_held(state[b]):
             state[b] = RELEASED
-        skip[b] = 0
 
 
 @numba.njit(cache=True)
@@ -284,7 +286,7 @@ def _held_rows(prog, first, state, J_reg, n, m, arow, Aa, ma) -> int:
     Jacobian rows into ``Aa`` from ``ma`` on); returns the new count."""
     bint = prog[0]
     for b in range(bint.shape[0]):
-        if state[b] != HELD and state[b] != KICKED:
+        if not _is_held(state[b]):
             continue
         f = first[b]
         for c in range(bint[b, ROWS]):
@@ -316,13 +318,18 @@ def _moving_rows(Aa, arow, fidx, nf, mr, ma) -> int:
 
 
 @numba.njit(cache=True)
+def _leaving_pays(prog, b, lam, start) -> float:
+    """The norm of block ``b``'s multipliers ``lam[start:start + rows]`` when it exceeds the norm's slope ``w s``
+    (held at zero, the block then lowers the sum by leaving it: the subgradient condition fails), else 0."""
+    norm = np.sqrt(squared_norm(lam[start:], prog[0][b, ROWS]))
+    return norm if norm > prog[1][b, WEIGHT] * prog[1][b, SCALE] * (1.0 + 1e-9) else 0.0
+
+
+@numba.njit(cache=True)
 def _kick_due(prog, first, state, lam, m) -> bool:
-    """Whether a held regularizer's multiplier ``lam[m + row]`` exceeds its norm's slope (see
-    :func:`_update_holds`)."""
-    bint, bflt = prog[0], prog[1]
-    for b in range(bint.shape[0]):
-        if state[b] == HELD and np.sqrt(squared_norm(lam[m + first[b]:], bint[b, ROWS])) > \
-                bflt[b, WEIGHT] * bflt[b, SCALE] * (1.0 + 1e-9):
+    """Whether a held regularizer's multiplier ``lam[m + row]`` says leaving zero pays (:func:`_leaving_pays`)."""
+    for b in range(state.shape[0]):
+        if state[b] == HELD and _leaving_pays(prog, b, lam, m + first[b]) > 0.0:
             return True
     return False
 
@@ -361,7 +368,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
            np.zeros(m), np.empty(n))
     nb = prog[0].shape[0]
     first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
-    skip, target = np.zeros(nb, dtype=np.int8), np.zeros(q)  # blocks out of G's derivatives; kicked norms' aims
+    target = np.zeros(q)  # kicked norms' aims
     _regularizer_rows(prog, first)
     cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
@@ -384,7 +391,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     feasible = max(np.sqrt(squared_norm(cur[3], m)), 1e-13)
     G = level_value(REGULARIZERS, prog, cur_r[3], YES)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                          TRUST_START, skip)  # norms shorter than the first trust radius: moved to, not past, zero
+                          TRUST_START, state)  # norms shorter than the first trust radius: moved to, not past, zero
     ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
     _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, lam)  # of the start: least squares A Aᵀ λ = A ∇G
     fresh = True  # g, H hold the derivatives at x
@@ -397,11 +404,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             status = DEADLINE
             break
         iterations += 1
-        if _update_holds(prog, cur_r[3], first, state, lam, m, target, skip):
+        if _update_holds(prog, cur_r[3], first, state, lam, m, target):
             fresh = False  # G's derivatives without the held norms
         if not fresh:  # a norm shorter than the last step gets its majorizing curvature
             objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, YES, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                                  2.0 * last_step, skip)
+                                  2.0 * last_step, state)
             fresh = True
         ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, True)
         own_rows = ma  # rows held with their own Jacobian at x; the blocking rows follow them
@@ -425,7 +432,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if not held_now[a]:
                 lam[a] = 0.0
         for b in range(nb):
-            if first[b] >= 0 and skip[b] == 0:
+            if first[b] >= 0 and not _is_held(state[b]):
                 for c in range(bint[b, ROWS]):
                     lam[m + first[b] + c] = 0.0
         for i in range(n):  # gl = ∇G − Aᵀλ, the Lagrangian's gradient
@@ -441,7 +448,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         ma = _moving_rows(Aa, arow, fidx, nf, mr, ma)
         if nf <= mr:  # (held norms may be redundant with the task: their rows are solved in least squares)
             if ma > mr:  # no freedom left with the held regularizers: let them go
-                _release_holds(state, skip)
+                _release_holds(state)
                 fresh = False
                 continue
             if ma > own_rows:  # held by the blocking rows (linearized at trial points): backtrack without them
@@ -468,7 +475,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             row += rows
         extra = 0.0  # what the step gains on the held norms (out of gl: taken to zero), or inf for a kick
         for b in range(nb):
-            if skip[b] == 0:
+            if not _is_held(state[b]):
                 continue
             f = first[b]
             for c in range(bint[b, ROWS]):
@@ -572,7 +579,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             last_step = alpha * step
             for b in range(nb):
                 if state[b] == KICKED:  # off zero along its multiplier: free from here (no majorizing curvature)
-                    state[b], skip[b], last_step = RELEASED, 0, 0.0
+                    state[b], last_step = RELEASED, 0.0
             if alpha == 1.0:
                 mu = max(mu * 0.1, MU_MIN)
                 trust = min(2.0 * trust, TRUST_MAX)
@@ -602,7 +609,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
              RESTORE_STEPS, 0.0)  # to the last bit
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
-                          0.0, skip)
+                          0.0, state)
     ma = _active_rows(cur[4][:m], cur[3], lam, hinge, arow, Aa, False)
     ma = _held_rows(prog, first, state, cur_r[4], n, m, arow, Aa, ma)  # held norms: constraints, out of ∇G
     _scatter_multipliers(Aa[:ma], g, Am, Lm, ym, lam_a, arow, ma, lam)
