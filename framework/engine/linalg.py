@@ -148,3 +148,245 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
         for j in range(i):
             A[j, i] = A[i, j]
     return cholesky_solve(A, g, L, dx)
+
+
+@numba.njit(cache=True)
+def null_space(A, W, V, beta, Z) -> int:
+    """An orthonormal basis of the null space of ``A (m, k)`` into the columns of ``Z[:k, :nz]``; returns ``nz``
+    (``k`` minus the numerical rank).
+
+    Householder QR with column pivoting of ``Aᵀ``: its first ``rank`` reflections span the rows, and the rest of
+    ``Q`` is the null space. A row whose remainder is below ``1e-9`` of the largest row norm adds no rank
+    (redundant rows: held groups that repeat the task's constraints). ``W, V (k, m)``, ``beta (m,)`` are scratch.
+    """
+    m, k = A.shape
+    biggest = 0.0
+    for a in range(m):
+        s = 0.0
+        for i in range(k):
+            W[i, a] = A[a, i]
+            s += W[i, a] * W[i, a]
+        biggest = max(biggest, s)
+    tiny = 1e-18 * biggest  # (1e-9 of the norm, squared)
+    rank = 0
+    for j in range(min(k, m)):
+        pick, best = j, -1.0
+        for a in range(j, m):  # the row with the largest remainder (column of W) next
+            s = 0.0
+            for i in range(j, k):
+                s += W[i, a] * W[i, a]
+            if s > best:
+                pick, best = a, s
+        if not best > tiny:
+            break
+        if pick != j:
+            for i in range(k):
+                W[i, j], W[i, pick] = W[i, pick], W[i, j]
+        alpha = -np.sqrt(best) if W[j, j] >= 0.0 else np.sqrt(best)
+        for i in range(k):
+            V[i, j] = W[i, j] if i >= j else 0.0
+        V[j, j] -= alpha
+        vv = 0.0
+        for i in range(j, k):
+            vv += V[i, j] * V[i, j]
+        beta[j] = 2.0 / vv
+        for a in range(j, m):  # W ← (I − β v vᵀ) W
+            s = 0.0
+            for i in range(j, k):
+                s += V[i, j] * W[i, a]
+            s *= beta[j]
+            for i in range(j, k):
+                W[i, a] -= s * V[i, j]
+        rank += 1
+    nz = k - rank
+    for t in range(nz):  # Z e_t = H_0 H_1 … H_{rank−1} e_{rank+t}
+        for i in range(k):
+            Z[i, t] = 1.0 if i == rank + t else 0.0
+        for j in range(rank - 1, -1, -1):
+            s = 0.0
+            for i in range(j, k):
+                s += V[i, j] * Z[i, t]
+            s *= beta[j]
+            for i in range(j, k):
+                Z[i, t] -= s * V[i, j]
+    return nz
+
+
+@numba.njit(cache=True)
+def symmetric_eigen(S, k, E, V, w) -> None:
+    """Eigenvalues ``w[:k]`` (ascending) and orthonormal eigenvectors (the columns of ``V[:k, :k]``) of the
+    symmetric ``S[:k, :k]``: Householder reduction to tridiagonal form, then the QL algorithm with implicit shifts
+    (``tred2`` and ``tqli`` of Numerical Recipes, 2nd ed., §11.2-11.3). ``E (k, k)`` is scratch; its first row
+    holds the off-diagonal."""
+    a, d, e = V, w, E[0]
+    for i in range(k):
+        for j in range(k):
+            a[i, j] = S[i, j]
+    for i in range(k - 1, 0, -1):  # Householder: a ← Qᵀ a Q tridiagonal, Q accumulated in a
+        l = i - 1
+        h = 0.0
+        if l > 0:
+            scale = 0.0
+            for q in range(l + 1):
+                scale += abs(a[i, q])
+            if scale == 0.0:
+                e[i] = a[i, l]
+            else:
+                for q in range(l + 1):
+                    a[i, q] /= scale
+                    h += a[i, q] * a[i, q]
+                f = a[i, l]
+                g = -np.sqrt(h) if f >= 0.0 else np.sqrt(h)
+                e[i] = scale * g
+                h -= f * g
+                a[i, l] = f - g
+                f = 0.0
+                for j in range(l + 1):
+                    a[j, i] = a[i, j] / h
+                    g = 0.0
+                    for q in range(j + 1):
+                        g += a[j, q] * a[i, q]
+                    for q in range(j + 1, l + 1):
+                        g += a[q, j] * a[i, q]
+                    e[j] = g / h
+                    f += e[j] * a[i, j]
+                hh = f / (h + h)
+                for j in range(l + 1):
+                    f = a[i, j]
+                    g = e[j] - hh * f
+                    e[j] = g
+                    for q in range(j + 1):
+                        a[j, q] -= f * e[q] + g * a[i, q]
+        else:
+            e[i] = a[i, l]
+        d[i] = h
+    d[0] = 0.0
+    e[0] = 0.0
+    for i in range(k):  # the transformation Q
+        if d[i] != 0.0:
+            for j in range(i):
+                g = 0.0
+                for q in range(i):
+                    g += a[i, q] * a[q, j]
+                for q in range(i):
+                    a[q, j] -= g * a[q, i]
+        d[i] = a[i, i]
+        a[i, i] = 1.0
+        for j in range(i):
+            a[j, i] = 0.0
+            a[i, j] = 0.0
+    for i in range(1, k):  # QL with implicit shifts on the tridiagonal (d, e), rotations accumulated in a
+        e[i - 1] = e[i]
+    e[k - 1] = 0.0
+    for l in range(k):
+        for _ in range(60):
+            m = l
+            while m < k - 1:
+                dd = abs(d[m]) + abs(d[m + 1])
+                if abs(e[m]) <= 1e-16 * dd:
+                    break
+                m += 1
+            if m == l:
+                break
+            g = (d[l + 1] - d[l]) / (2.0 * e[l])
+            r = np.sqrt(g * g + 1.0)
+            g = d[m] - d[l] + e[l] / (g + (r if g >= 0.0 else -r))
+            s = c = 1.0
+            p = 0.0
+            deflated = False
+            for i in range(m - 1, l - 1, -1):
+                f = s * e[i]
+                b = c * e[i]
+                r = np.sqrt(f * f + g * g)
+                e[i + 1] = r
+                if r == 0.0:
+                    d[i + 1] -= p
+                    e[m] = 0.0
+                    deflated = True
+                    break
+                s = f / r
+                c = g / r
+                g = d[i + 1] - p
+                r = (d[i] - g) * s + 2.0 * c * b
+                p = s * r
+                d[i + 1] = g + p
+                g = c * r - b
+                for q in range(k):
+                    f = a[q, i + 1]
+                    a[q, i + 1] = s * a[q, i] + c * f
+                    a[q, i] = c * a[q, i] - s * f
+            if deflated:
+                continue
+            d[l] -= p
+            e[l] = g
+            e[m] = 0.0
+    for i in range(k):  # ascending (selection sort, the vectors along)
+        j = i
+        for c in range(i + 1, k):
+            if w[c] < w[j]:
+                j = c
+        if j != i:
+            w[i], w[j] = w[j], w[i]
+            for r in range(k):
+                V[r, i], V[r, j] = V[r, j], V[r, i]
+
+
+@numba.njit(cache=True)
+def _length(c, w, tau, k) -> float:
+    """``‖(S + τI)⁻¹ g‖`` in the eigenbasis (``c = Vᵀg``, ``w`` the eigenvalues)."""
+    s = 0.0
+    for i in range(k):
+        d = c[i] / (w[i] + tau)
+        s += d * d
+    return np.sqrt(s)
+
+
+@numba.njit(cache=True)
+def trust_region_step(w, V, g, k, radius, c, p) -> float:
+    """The minimizer ``p[:k]`` of the model ``gᵀp + ½ pᵀSp`` within ``‖p‖ ≤ radius`` (Moré and Sorensen's
+    characterization, solved in the eigenbasis of ``S = V diag(w) Vᵀ``, ``w`` ascending): ``p = −(S + τI)⁻¹ g``
+    with ``S + τI`` positive semidefinite and ``τ (radius − ‖p‖) = 0``. Where ``g`` has (almost) nothing along the
+    lowest eigenvector and that leaves the step short (the *hard case*, e.g. at a saddle point, where ``g ≈ 0``),
+    the step is completed along that eigenvector to the boundary. ``c (k,)`` is scratch. Returns the model's
+    decrease ``−(gᵀp + ½ pᵀSp) ≥ 0``."""
+    for i in range(k):
+        s = 0.0
+        for r in range(k):
+            s += V[r, i] * g[r]
+        c[i] = s
+    scale = max(abs(w[0]), abs(w[k - 1]), 1e-300)
+    if w[0] > 1e-12 * scale and _length(c, w, 0.0, k) <= radius:
+        tau, t = 0.0, 0.0  # the Newton step, inside
+    else:
+        lo = max(0.0, -w[0]) + 1e-12 * scale  # S + τI positive definite beyond it
+        t = 0.0
+        if _length(c, w, lo, k) <= radius:  # the hard case: the rest of the way along the lowest eigenvector
+            tau = lo
+            short = _length(c, w, tau, k)
+            t = np.sqrt(max(radius * radius - short * short, 0.0))
+            if c[0] > 0.0:
+                t = -t
+        else:  # Newton on 1/‖p(τ)‖ − 1/radius (concave, increasing in τ): from the left, monotone to the root
+            tau = lo
+            for _ in range(50):
+                length = _length(c, w, tau, k)
+                if length <= radius * (1.0 + 1e-6):
+                    break
+                s3 = 0.0
+                for i in range(k):
+                    d = w[i] + tau
+                    s3 += c[i] * c[i] / (d * d * d)
+                tau += (length - radius) / radius * length * length / s3
+    decrease = 0.0
+    for i in range(k):
+        a = -c[i] / (w[i] + tau) if w[i] + tau > 0.0 else 0.0
+        if i == 0:
+            a += t
+        decrease -= c[i] * a + 0.5 * w[i] * a * a
+        c[i] = a  # the step's coordinates in the eigenbasis
+    for r in range(k):
+        s = 0.0
+        for i in range(k):
+            s += V[r, i] * c[i]
+        p[r] = s
+    return decrease

@@ -5,7 +5,13 @@ regularizers (level 2, e.g. motion) without leaving it: Newton steps on the KKT 
 ``[H Aᵀ; A 0] [dx; −λ] = [−∇G; −r]`` over the coordinates not held at a bound, with ``H`` the Hessian of the
 Lagrangian ``G − λᵀr`` (the regularizers' own curvature plus the task's second-order kinematics, see
 :func:`~framework.costs.curvature.block_curvature`), followed by Gauss-Newton steps back onto the task. A step is
-kept only if it lowers ``G`` on the task; otherwise the Hessian is damped (``H + μI``). Converges quadratically.
+kept only if it lowers ``G`` on the task (and leaves it no further than it started); otherwise the Hessian is
+damped (``H + μI``). Converges quadratically to a local minimum: where the Lagrangian's Hessian is not positive
+definite on the task's null space, or the Newton step is longer than the trust radius, the step is the
+trust-region step there instead (:func:`_tangent_step`: negative curvature, a saddle point's included, is followed
+to the radius; a too-long step is damped, not cut, so it does not zig-zag along the norms' flat rays).
+A coordinate that a step carries through its bound within its first tenth (:data:`PIN`) is moved onto the bound
+and the rest of the step solved again (clipped, the step would leave the task's tangent).
 One-sided rows (distance bands, cones, collision rows) are inequalities: a row with a Jacobian is held as an
 equality until its multiplier lets it go; a row clear where a step starts has no Jacobian there, so when a trial
 step enters one and is rejected, the step is solved again holding that row with its Jacobian at the trial
@@ -28,14 +34,39 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import (HALFSIN, KIND, LEVEL, NORM, RHO, ROWS, SCALE, WEIGHT, is_hinge, rho_derivatives,
-                            rho_value, wrap_angle)
+from ..costs.blocks import (
+    HALFSIN,
+    KIND,
+    LEVEL,
+    NORM,
+    RHO,
+    ROWS,
+    SCALE,
+    WEIGHT,
+    is_hinge,
+    rho_derivatives,
+    rho_value,
+    wrap_angle,
+)
 from ..costs.curvature import block_curvature
-from ..costs.kernels import (COMPUTE, NO, REGULARIZERS, REUSE, ROW0, TASK, TASK_AND_REGULARIZERS, YES,
-                             level_value, linearize, task_errors, term_values, workspace)
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
+from ..costs.kernels import (
+    COMPUTE,
+    NO,
+    REGULARIZERS,
+    REUSE,
+    ROW0,
+    TASK,
+    TASK_AND_REGULARIZERS,
+    YES,
+    level_value,
+    linearize,
+    task_errors,
+    term_values,
+    workspace,
+)
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
-from .linalg import cholesky_solve, gram, lu_solve
+from .linalg import cholesky_solve, gram, lu_solve, null_space, symmetric_eigen, trust_region_step
 from .reach import bounded_step, held, project, rows_of, squared_norm
 
 #: Newton damping: start, floor, and where a phase gives up on further progress.
@@ -51,6 +82,10 @@ RESTORE_STEPS, LINE_SEARCH = 4, 4
 #: Damping of those steps: enough for a Cholesky factor of a rank-deficient ``JᵀJ`` (clear hinge rows have no
 #: Jacobian), far below the curvature of any row that moves.
 RESTORE_DAMPING = 1e-14
+
+#: A coordinate that a Newton step carries through its bound within this fraction of the step is held where it
+#: is (near its bound) for that step.
+PIN = 0.1
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
 #: A norm regularizer (``ρ = s‖r‖``) shorter than this [its residual's unit: rad or m] is held at zero as a
@@ -122,9 +157,10 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
 
 
 @numba.njit(cache=True)
-def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target) -> float:
+def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before) -> float:
     """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
-    the step would push through are left out of it; ``A, L`` flat scratch); returns the final ``‖r‖``."""
+    the step would push through are left out of it; ``A, L`` flat scratch); a step that raises ``‖r‖`` by more
+    than rounding (1e-14) is undone (``before (n,)`` scratch). Returns the final ``‖r‖``."""
     n = x.shape[0]
     e = np.sqrt(squared_norm(ws[3], m))
     for _ in range(steps):
@@ -132,13 +168,18 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps
             break
         if not bounded_step(x, ws[4][:m], ws[3][:m], RESTORE_DAMPING, lower, upper, box_wrap, Jc, A, L, y, dx):
             break
+        before[:] = x
         for i in range(n):
             x[i] += dx[i]
         project(x, lower, upper, box_wrap)
         linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
         e_new = np.sqrt(squared_norm(ws[3], m))
         if not e_new < e:
-            e = e_new
+            if e_new > e + 1e-14:  # worse, beyond rounding: undone
+                x[:] = before
+                linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
+            else:
+                e = e_new
             break
         e = e_new
     return e
@@ -335,6 +376,124 @@ def _kick_due(prog, first, state, lam, m) -> bool:
 
 
 @numba.njit(cache=True)
+def tangent_scratch(n: int, rows: int) -> tuple:
+    """Scratch of :func:`_tangent_step` for ``n`` coordinates and up to ``rows`` active rows."""
+    return (np.empty((n, rows)), np.empty((n, rows)), np.empty(rows), np.empty((n, n)), np.empty((n, n)),
+            np.empty(n * n), np.empty(n * n), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(rows * rows), np.empty(rows * rows),
+            np.empty(rows), np.empty(rows))
+
+
+@numba.njit(cache=True)
+def _tangent_step(K, rhs, nf, ma, trust, sv, scratch) -> float:
+    """The solution ``sv`` of the step's KKT system ``K sv = rhs`` (``K[:nf, :nf] = H + μI`` over the free
+    coordinates, ``K[nf:, :nf]`` the ``ma`` active rows ``A``, ``rhs[:nf] = −g``; ``sv[:nf]`` the step, then
+    ``−λ``) kept if it is a Newton step to a minimum within the trust radius; otherwise replaced by the
+    trust-region step: its normal part (onto the rows' linearization) plus the minimizer of the model over the
+    rows' null space within ``‖·‖₂ ≤ trust`` (:func:`~.linalg.trust_region_step`: negative curvature, a saddle
+    point's included, is followed to the boundary instead of to the saddle), with least-squares multipliers.
+    Returns the model's decrease along the tangent part, or ``−1`` when the KKT step stands."""
+    W, Vh, beta, Z, HZ, hz, lz, E, Vz, wz, gz, c, p, dn, u, aa, la, ra, y = scratch
+    longest = 0.0
+    for i in range(nf):
+        longest = max(longest, abs(sv[i]))
+    H, A = K[:nf, :nf], K[nf:nf + ma, :nf]
+    if longest <= trust:  # H + ρAᵀA positive definite: H is on the rows' null space (Debreu's lemma, one way)
+        scale, rows = 1.0, 1e-300
+        for i in range(nf):
+            scale = max(scale, abs(H[i, i]))
+        for a in range(ma):
+            s = 0.0
+            for i in range(nf):
+                s += A[a, i] * A[a, i]
+            rows = max(rows, s)
+        rho = 1e6 * scale / rows
+        Ha = square(hz, nf)
+        for i in range(nf):
+            for j in range(i + 1):
+                s = 0.0
+                for a in range(ma):
+                    s += A[a, i] * A[a, j]
+                Ha[i, j] = Ha[j, i] = H[i, j] + rho * s
+        if cholesky_solve(Ha, sv, square(lz, nf), c):
+            return -1.0  # the Newton step
+    nz = null_space(A, W, Vh, beta, Z)
+    if nz == 0:
+        return -1.0
+    for t in range(nz):  # the tangent part p of the step, and its normal part dn
+        s = 0.0
+        for i in range(nf):
+            s += Z[i, t] * sv[i]
+        p[t] = s
+    for i in range(nf):
+        s = sv[i]
+        for t in range(nz):
+            s -= Z[i, t] * p[t]
+        dn[i] = s
+    for i in range(nf):  # HZ = H Z and u = g + H dn
+        s = -rhs[i]
+        for j in range(nf):
+            s += H[i, j] * dn[j]
+        u[i] = s
+        for t in range(nz):
+            s = 0.0
+            for j in range(nf):
+                s += H[i, j] * Z[j, t]
+            HZ[i, t] = s
+    Hz, Lz = square(hz, nz), square(lz, nz)
+    for t in range(nz):  # the reduced Hessian Zᵀ H Z and gradient Zᵀu
+        s = 0.0
+        for i in range(nf):
+            s += Z[i, t] * u[i]
+        gz[t] = s
+        for v in range(t + 1):
+            s = 0.0
+            for i in range(nf):
+                s += Z[i, t] * HZ[i, v]
+            Hz[t, v] = s
+            Hz[v, t] = s
+    radius = trust
+    if cholesky_solve(Hz, gz, Lz, c):  # positive definite on the tangent space
+        if longest <= trust:
+            return -1.0  # and within the trust radius: the Newton step
+        length = 0.0  # too long: the radius is what the step cut to ``trust`` in its largest coordinate is long
+        for i in range(nf):
+            length += sv[i] * sv[i]
+        radius = trust * np.sqrt(length) / longest
+    symmetric_eigen(Hz, nz, E, Vz, wz)
+    decrease = trust_region_step(wz, Vz, gz, nz, radius, c, p)
+    for i in range(nf):  # the step, and the multipliers of Aᵀλ = g + H step (least squares)
+        s = dn[i]
+        for t in range(nz):
+            s += Z[i, t] * p[t]
+        sv[i] = s
+    for i in range(nf):
+        s = -rhs[i]
+        for j in range(nf):
+            s += H[i, j] * sv[j]
+        u[i] = s
+    AA, LA = square(aa, ma), square(la, ma)
+    for a in range(ma):
+        s = 0.0
+        for i in range(nf):
+            s += A[a, i] * u[i]
+        ra[a] = s
+        for b in range(a + 1):
+            s = 0.0
+            for i in range(nf):
+                s += A[a, i] * A[b, i]
+            AA[a, b] = s
+            AA[b, a] = s
+    for a in range(ma):  # a ridge far below the rows' scale: least norm where rows are redundant
+        AA[a, a] += 1e-12 * (1.0 + AA[a, a])
+    if not cholesky_solve(AA, ra[:ma], LA, y[:ma]):
+        y[:ma] = 0.0
+    for a in range(ma):
+        sv[nf + a] = -y[a]
+    return decrease
+
+
+@numba.njit(cache=True)
 def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, deadline_ns, multipliers,
                errors, values, stats) -> int:
     """Minimize the weighted regularizers on the task from ``x`` (which reaches it); ``x`` is updated in place.
@@ -366,6 +525,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
            np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(mq, dtype=np.int64), np.empty((mq, n)),
            np.zeros(mq), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
            np.zeros(m), np.empty(n))
+    own_tangent = tangent_scratch(n, mq)
+    tangent = (borrow(own_tangent[0]), borrow(own_tangent[1]), borrow(own_tangent[2]), borrow(own_tangent[3]),
+               borrow(own_tangent[4]), borrow(own_tangent[5]), borrow(own_tangent[6]), borrow(own_tangent[7]),
+               borrow(own_tangent[8]), borrow(own_tangent[9]), borrow(own_tangent[10]), borrow(own_tangent[11]),
+               borrow(own_tangent[12]), borrow(own_tangent[13]), borrow(own_tangent[14]), borrow(own_tangent[15]),
+               borrow(own_tangent[16]), borrow(own_tangent[17]), borrow(own_tangent[18]))
     nb = prog[0].shape[0]
     first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
     target = np.zeros(q)  # kicked norms' aims
@@ -399,6 +564,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     status, iterations, accepted = ITERATIONS, 0, 0
     bint, bflt = prog[0], prog[1]
     unblocked, failed = False, 0
+    pinned = np.zeros(n, dtype=np.bool_)  # coordinates the last step at x carried through a bound: moved onto it
+    shift, gs = np.zeros(n), np.empty(n)  # (their moves, and the gradient g + H shift the others see)
+    before = np.empty(n)  # a restoring step's start
     while iterations < max_iterations:
         if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
             status = DEADLINE
@@ -442,7 +610,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             gl[i] = s
         nf = 0
         for i in range(n):  # the coordinates descent along −gl does not push through a bound
-            if not held(x[i], lower[i], upper[i], box_wrap[i], -gl[i]):
+            if not pinned[i] and not held(x[i], lower[i], upper[i], box_wrap[i], -gl[i]):
                 fidx[nf] = i
                 nf += 1
         ma = _moving_rows(Aa, arow, fidx, nf, mr, ma)
@@ -484,6 +652,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                             cur_r[3], f, Hlb)
             extra += np.inf if state[b] == KICKED else \
                 bflt[b, WEIGHT] * bflt[b, SCALE] * np.sqrt(squared_norm(cur_r[3][f:], bint[b, ROWS]))
+        for i in range(n):  # the pinned coordinates' moves onto their bounds, seen by the others
+            s = g[i]
+            for j in range(n):
+                if shift[j] != 0.0:
+                    s += Hlb[i, j] * shift[j]
+            gs[i] = s
         for a in range(nf):
             i = fidx[a]
             for c in range(nf):
@@ -492,7 +666,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for c in range(ma):
                 Kv[a, nf + c] = Aa[c, i]
                 Kv[nf + c, a] = Aa[c, i]
-            rv[a] = -g[i]
+            rv[a] = -gs[i]
         for a in range(ma):
             for c in range(ma):
                 Kv[nf + a, nf + c] = 0.0
@@ -504,6 +678,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 rv[nf + a] = -cb[arow[a]]
             else:  # a held norm to zero, a kicked one to its aim (+ δλ: exactly there once λ settles)
                 rv[nf + a] = target[arow[a] - m] - cur_r[3][arow[a] - m] + HELD_DAMPING * lam[arow[a]]
+            for j in range(n):
+                if shift[j] != 0.0:
+                    rv[nf + a] -= Aa[a, j] * shift[j]
         if not lu_solve(Kv, rv, Mv, sv):
             if mr > own_rows:  # the blocking rows' Jacobians (from trial points) made it singular: let them go,
                 blocking[:] = False  # and backtrack without them until a step is taken
@@ -514,16 +691,29 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 status = STALLED
                 break
             continue
+        model = _tangent_step(Kv, rv, nf, ma, trust, sv, tangent)
+        pushed = False
+        for a in range(nf):  # a coordinate the step carries through its bound within its first tenth: moved
+            i = fidx[a]  # onto the bound, and the step solved again (clipped, the step would leave the task)
+            if not box_wrap[i] and ((sv[a] > 0.0 and upper[i] - x[i] < PIN * sv[a]) or
+                                    (sv[a] < 0.0 and x[i] - lower[i] < -PIN * sv[a])):
+                pinned[i] = pushed = True
+                shift[i] = (upper[i] if sv[a] > 0.0 else lower[i]) - x[i]
+        if pushed:
+            continue
         step = 0.0
         for i in range(n):
-            dx[i] = 0.0
+            dx[i] = shift[i]
+            step = max(step, abs(shift[i]))
         for a in range(nf):
             dx[fidx[a]] = sv[a]
             step = max(step, abs(sv[a]))
         predicted = 0.0  # first-order decrease of the Lagrangian along the step (within the trust region)
         for i in range(n):
             predicted -= gl[i] * dx[i]
-        if step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
+        if model >= 0.0:  # a trust-region step: its model's decrease (negative curvature counts)
+            predicted = model
+        elif step > trust:  # along a flat direction of G (a norm along its own ray) Newton steps are unbounded
             predicted *= trust / step
         predicted += extra
         if step < 1e-12 or predicted < 1e-15 * (1.0 + abs(G)):  # no step, or below what G can resolve
@@ -551,11 +741,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             entered = not unblocked and _entered(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta,
                                                  Jb, cb, sb)
             e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym,
-                         dxm, Jc, RESTORE_STEPS, feasible)
+                         dxm, Jc, RESTORE_STEPS, feasible, before)
             linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
             evaluations += 1
             Gt = level_value(REGULARIZERS, prog, tri_r[3], YES)
-            if e <= 10.0 * feasible and Gt < G:
+            if e <= feasible and Gt < G:
                 accepted_step = True
                 break
             if entered:  # the step entered one-sided rows clear at x: solve it again holding them
@@ -568,6 +758,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             _moved(x, xt, box_wrap, blocking, Jb, cb, delta)
             x[:] = xt
             unblocked = False
+            pinned[:] = False
+            shift[:] = 0.0
             failed = 0
             G = Gt
             for a in range(mq):
@@ -606,7 +798,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 status = STALLED
                 break
     _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym, dxm, Jc,
-             RESTORE_STEPS, 0.0)  # to the last bit
+             RESTORE_STEPS, 0.0, before)  # to the last bit
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                           0.0, state)
@@ -617,7 +809,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri, own)
+    keep_alive(own_cur, own_tri, own, own_tangent)
     return status
 
 

@@ -1,0 +1,90 @@
+"""The compiled loops' small dense linear algebra against numpy and scipy: null spaces, symmetric eigenproblems and
+the trust-region subproblem of the Newton phase."""
+
+import numpy as np
+import pytest
+import scipy.optimize as so
+
+from framework.engine.linalg import null_space, symmetric_eigen, trust_region_step
+
+
+def test_null_space_is_orthonormal_and_has_the_dimension_numpy_ranks(rng):
+    """Random matrices (strided views of larger ones), a third with a redundant row (their rank one lower)."""
+    for trial in range(100):
+        m, k = int(rng.integers(1, 8)), int(rng.integers(1, 14))
+        A = rng.normal(size=(m, k + 3))
+        if m > 2 and trial % 3 == 0:
+            A[-1] = 2.0 * A[0] - A[1]
+        cols = rng.permutation(k + 3)[:k].astype(np.int64)
+        W, V, beta, Z = np.empty((k, m)), np.empty((k, m)), np.empty(m), np.empty((k, k))
+        nz = null_space(A[:, cols], W, V, beta, Z)
+        assert nz == k - np.linalg.matrix_rank(A[:, cols])
+        if nz:
+            assert np.abs(A[:, cols] @ Z[:, :nz]).max() < 1e-12  # a random basis: ~1
+            np.testing.assert_allclose(Z[:, :nz].T @ Z[:, :nz], np.eye(nz), atol=1e-12)
+
+
+def test_symmetric_eigen_matches_numpy(rng):
+    for k in (1, 2, 5, 13):
+        for _ in range(20):
+            S = rng.normal(size=(k, k))
+            S = S + S.T
+            if k > 2:
+                S[:, 0] = S[0, :] = 0.0  # a zero eigenvalue and a decoupled block
+            E, V, w = np.empty((k, k)), np.empty((k, k)), np.empty(k)
+            symmetric_eigen(S, k, E, V, w)
+            np.testing.assert_allclose(w, np.linalg.eigvalsh(S), atol=1e-12 * max(1.0, np.abs(w).max()))
+            np.testing.assert_allclose(V @ np.diag(w) @ V.T, S, atol=1e-12 * max(1.0, np.abs(w).max()))
+            np.testing.assert_allclose(V.T @ V, np.eye(k), atol=1e-12)
+
+
+def _solve(S, g, radius):
+    k = S.shape[0]
+    E, V, w, c, p = np.empty((k, k)), np.empty((k, k)), np.empty(k), np.empty(k), np.empty(k)
+    symmetric_eigen(S, k, E, V, w)
+    decrease = trust_region_step(w, V, g, k, radius, c, p)
+    return p, decrease
+
+
+def _model(S, g, p):
+    return float(g @ p + 0.5 * p @ S @ p)
+
+
+def _best_on_ball(S, g, radius, rng, starts=20):
+    """The lowest model value scipy's SLSQP finds within ``‖p‖ ≤ radius`` from ``starts`` random starts (0: none)."""
+    best = 0.0
+    for _ in range(starts):
+        start = rng.normal(size=S.shape[0])
+        start *= rng.uniform(0, radius) / np.linalg.norm(start)
+        s = so.minimize(lambda z: _model(S, g, z), start, method="SLSQP",
+                        constraints=[{"type": "ineq", "fun": lambda z: radius**2 - z @ z}],
+                        options={"ftol": 1e-14, "maxiter": 200})
+        if s.x @ s.x <= radius**2 * (1 + 1e-9):
+            best = min(best, s.fun)
+    return best
+
+
+@pytest.mark.parametrize("kind", ["definite", "indefinite", "saddle"])
+def test_trust_region_step_is_the_models_minimum_on_the_ball(rng, kind):
+    """Against scipy's SLSQP from 20 starts on the ball (its best), for positive definite models (inside and on the
+    boundary), indefinite ones, and saddle points (g = 0, the hard case: the step goes along the lowest eigenvector
+    to the boundary). The step returned is never worse than the best start, and its reported decrease is its model's
+    (a step of zero decreases nothing: the minima found are all below zero)."""
+    for _ in range(10):
+        k = int(rng.integers(2, 8))
+        Q, _ = np.linalg.qr(rng.normal(size=(k, k)))
+        w = rng.uniform(0.1, 2.0, k) if kind == "definite" else rng.uniform(-1.0, 2.0, k)
+        if kind != "definite":
+            w[0] = -abs(w[0]) - 0.1
+        S = Q @ np.diag(w) @ Q.T
+        g = np.zeros(k) if kind == "saddle" else rng.normal(size=k)
+        radius = float(rng.uniform(0.05, 2.0))
+        p, decrease = _solve(S, g, radius)
+        assert np.linalg.norm(p) <= radius * (1 + 1e-6)
+        assert decrease == pytest.approx(-_model(S, g, p), abs=1e-12)
+        best = _best_on_ball(S, g, radius, rng)
+        assert best < -1e-6
+        assert _model(S, g, p) <= best + 1e-9
+        if kind == "saddle":
+            assert np.linalg.norm(p) == pytest.approx(radius, rel=1e-9)
+            assert decrease == pytest.approx(-0.5 * w.min() * radius**2, rel=1e-9)
