@@ -139,7 +139,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
             rows.append((*_strictly(problem, result, shape, None), seconds, _on_hulls(result)))
     paper = [_row("paper 000 targets, unconstrained", rows_free), _row("paper 000 targets, SelfCollision", rows_coll)]
     kept_free, kept_coll, tries, build = [], [], 0, []
-    while len(kept_coll) < count and tries < 50 * count:
+    while len(kept_coll) < count and tries < 200 * count:
         tries += 1
         x = robot.random_configurations(rng, 1)[0]
         if shape.check(x, distances=False).colliding:
