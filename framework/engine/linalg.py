@@ -150,6 +150,17 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
     return cholesky_solve(A, g, L, dx)
 
 
+@numba.njit(cache=True, inline="always")
+def _reflect(V, beta, j, k, M, col) -> None:
+    """Column ``col`` of ``M`` times the ``j``-th Householder reflection ``I − β_j v_j v_jᵀ`` (``v_j = V[j:k, j]``)."""
+    s = 0.0
+    for i in range(j, k):
+        s += V[i, j] * M[i, col]
+    s *= beta[j]
+    for i in range(j, k):
+        M[i, col] -= s * V[i, j]
+
+
 @numba.njit(cache=True)
 def null_space(A, W, V, beta, Z) -> int:
     """An orthonormal basis of the null space of ``A (m, k)`` into the columns of ``Z[:k, :nz]``; returns ``nz``
@@ -191,24 +202,14 @@ def null_space(A, W, V, beta, Z) -> int:
             vv += V[i, j] * V[i, j]
         beta[j] = 2.0 / vv
         for a in range(j, m):  # W ← (I − β v vᵀ) W
-            s = 0.0
-            for i in range(j, k):
-                s += V[i, j] * W[i, a]
-            s *= beta[j]
-            for i in range(j, k):
-                W[i, a] -= s * V[i, j]
+            _reflect(V, beta, j, k, W, a)
         rank += 1
     nz = k - rank
     for t in range(nz):  # Z e_t = H_0 H_1 … H_{rank−1} e_{rank+t}
         for i in range(k):
             Z[i, t] = 1.0 if i == rank + t else 0.0
         for j in range(rank - 1, -1, -1):
-            s = 0.0
-            for i in range(j, k):
-                s += V[i, j] * Z[i, t]
-            s *= beta[j]
-            for i in range(j, k):
-                Z[i, t] -= s * V[i, j]
+            _reflect(V, beta, j, k, Z, t)
     return nz
 
 

@@ -384,6 +384,16 @@ def tangent_scratch(n: int, rows: int) -> tuple:
             np.empty(rows), np.empty(rows))
 
 
+@numba.njit(cache=True, inline="always")
+def _model_gradient(H, rhs, d, nf, u) -> None:
+    """``u = g + H d`` over the ``nf`` free coordinates (``rhs[:nf] = −g``): the model's gradient at ``d``."""
+    for i in range(nf):
+        s = -rhs[i]
+        for j in range(nf):
+            s += H[i, j] * d[j]
+        u[i] = s
+
+
 @numba.njit(cache=True)
 def _tangent_step(K, rhs, nf, ma, trust, sv, scratch) -> float:
     """The solution ``sv`` of the step's KKT system ``K sv = rhs`` (``K[:nf, :nf] = H + μI`` over the free
@@ -430,11 +440,8 @@ def _tangent_step(K, rhs, nf, ma, trust, sv, scratch) -> float:
         for t in range(nz):
             s -= Z[i, t] * p[t]
         dn[i] = s
-    for i in range(nf):  # HZ = H Z and u = g + H dn
-        s = -rhs[i]
-        for j in range(nf):
-            s += H[i, j] * dn[j]
-        u[i] = s
+    _model_gradient(H, rhs, dn, nf, u)
+    for i in range(nf):  # HZ = H Z
         for t in range(nz):
             s = 0.0
             for j in range(nf):
@@ -467,27 +474,9 @@ def _tangent_step(K, rhs, nf, ma, trust, sv, scratch) -> float:
         for t in range(nz):
             s += Z[i, t] * p[t]
         sv[i] = s
-    for i in range(nf):
-        s = -rhs[i]
-        for j in range(nf):
-            s += H[i, j] * sv[j]
-        u[i] = s
-    AA, LA = square(aa, ma), square(la, ma)
-    for a in range(ma):
-        s = 0.0
-        for i in range(nf):
-            s += A[a, i] * u[i]
-        ra[a] = s
-        for b in range(a + 1):
-            s = 0.0
-            for i in range(nf):
-                s += A[a, i] * A[b, i]
-            AA[a, b] = s
-            AA[b, a] = s
-    for a in range(ma):  # a ridge far below the rows' scale: least norm where rows are redundant
-        AA[a, a] += 1e-12 * (1.0 + AA[a, a])
-    if not cholesky_solve(AA, ra[:ma], LA, y[:ma]):
-        y[:ma] = 0.0
+    _model_gradient(H, rhs, sv, nf, u)
+    # a ridge far below the rows' scale: least norm where rows are redundant
+    _multipliers(A, u[:nf], square(aa, ma), square(la, ma), ra, y[:ma], 1e-12)
     for a in range(ma):
         sv[nf + a] = -y[a]
     return decrease
@@ -826,8 +815,9 @@ def _scatter_multipliers(Aa, g, Am, Lm, y, lam_a, arow, ma, lam):
 
 
 @numba.njit(cache=True)
-def _multipliers(A, g, Am, Lm, y, lam):
-    """Least-squares multipliers ``λ = (A Aᵀ)⁻¹ A g`` of ``g ≈ Aᵀλ`` (zeros if ``A`` is rank deficient)."""
+def _multipliers(A, g, Am, Lm, y, lam, ridge=0.0):
+    """Least-squares multipliers ``λ = (A Aᵀ + R)⁻¹ A g`` of ``g ≈ Aᵀλ``, ``R`` the diagonal ``ridge (1 + (A Aᵀ)ᵢᵢ)``
+    (zeros if ``A Aᵀ + R`` is not positive definite: ``A`` rank deficient without a ridge)."""
     m, n = A.shape
     for a in range(m):
         s = 0.0
@@ -835,8 +825,9 @@ def _multipliers(A, g, Am, Lm, y, lam):
             s += A[a, i] * g[i]
         y[a] = s
     gram(A, 0.0, Am)
-    rhs = y[:m].copy()
-    if not cholesky_solve(Am, rhs, Lm, lam):
+    for a in range(m):
+        Am[a, a] += ridge * (1.0 + Am[a, a])
+    if not cholesky_solve(Am, y, Lm, lam):
         lam[:] = 0.0
 
 
