@@ -248,6 +248,37 @@ def test_jacobians_of_the_frames_a_call_needs_equal_every_frames(rng):
     assert active >= 10 and clear >= 3
 
 
+def test_restoring_steps_see_the_rows_in_contact_as_the_kernel_stacks_them(rng):
+    """The Newton phase's restoring steps leave out the contact rows clear where they start (no Jacobian there;
+    their evaluation was most of a step's cost): the rows kept in place, moved up, are the residuals and Jacobian
+    rows that the kernel stacks for the block table with the clear ones set aside — exactly the rows of the whole
+    task that are not clear, in order. Dual youBot with SelfCollision at random configurations (most in contact,
+    a trivial compaction — none set aside — would leave 40 zero rows in)."""
+    from framework.costs.kernels import COMPUTE, TASK, YES, linearize, workspace
+    from framework.engine.newton import _set_aside_clear
+    from framework.taskfile import load_task
+
+    task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
+    robot = task.robot
+    problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.2, 0.4]) + fw.Position("arm2_ee", [0.5, -0.2, 0.4])
+                         + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
+    kin, prog = problem.program.kin, problem.program.prog
+    whole, kept = workspace(kin, prog, robot.n), workspace(kin, prog, robot.n)
+    near = prog[0].copy()
+    compacted = 0
+    for x in robot.random_configurations(rng, 60):
+        m = linearize(x, TASK, kin, prog, whole, YES, COMPUTE)
+        r, J = whole[3][:m].copy(), whole[4][:m].copy()
+        nonzero = (r != 0.0) | np.any(J != 0.0, axis=1)
+        mn = _set_aside_clear(prog[0], whole[3], whole[4], near)
+        assert linearize(x, TASK, kin, (near, *prog[1:]), kept, YES, COMPUTE) == mn
+        np.testing.assert_array_equal(whole[3][:mn], kept[3][:mn])
+        np.testing.assert_array_equal(whole[4][:mn], kept[4][:mn])
+        np.testing.assert_array_equal(whole[3][6:mn], r[6:][nonzero[6:]])  # one row per contact block
+        assert mn == 6 + nonzero[6:].sum()
+        compacted += mn < m
+    assert compacted >= 50
+
 def test_the_newton_phase_stops_on_an_obstacle_it_starts_clear_of(sphere_arm):
     """Motion towards a configuration whose forearm sphere is inside a sphere obstacle, from starts clear of it:
     the forearm's centre turns on a circle with θ1 + θ2, so the obstacle (kept ``margin`` away) allows

@@ -51,6 +51,7 @@ from ..costs.blocks import (
 from ..costs.curvature import block_curvature
 from ..costs.kernels import (
     COMPUTE,
+    JACOBIANS_FROM_POSES,
     NO,
     REGULARIZERS,
     REUSE,
@@ -60,6 +61,7 @@ from ..costs.kernels import (
     YES,
     level_value,
     linearize,
+    rows_clear,
     task_errors,
     term_values,
     workspace,
@@ -157,17 +159,42 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
 
 
 @numba.njit(cache=True)
-def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before) -> float:
-    """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
-    the step would push through are left out of it; ``A, L`` flat scratch); a step that raises ``‖r‖`` by more
-    than rounding (1e-14) is undone (``before (n,)`` scratch). Returns the final ``‖r‖``."""
+def _set_aside_clear(bint, r, J, near) -> int:
+    """``near``: the block table ``bint`` with the one-sided task blocks whose rows ``r`` are all zero (clear: no
+    Jacobian either) set aside (level 0); their rows are dropped from the stacked ``r (m,)`` and ``J (m, n)`` in
+    place, the others moved up in order, as :func:`~framework.costs.kernels.linearize` stacks ``near``'s task.
+    Returns the rows kept."""
+    row = kept = 0
+    for b in range(bint.shape[0]):
+        near[b, LEVEL] = bint[b, LEVEL]
+        if bint[b, LEVEL] != 1:
+            continue
+        rows = bint[b, ROWS]
+        if is_hinge(bint[b, KIND]) and rows_clear(r, row, rows):
+            near[b, LEVEL] = 0
+        else:
+            if kept != row:
+                for c in range(rows):
+                    r[kept + c] = r[row + c]
+                    J[kept + c, :] = J[row + c, :]
+            kept += rows
+        row += rows
+    return kept
+
+
+@numba.njit(cache=True)
+def _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before):
+    """Up to ``steps`` Gauss-Newton least-norm steps on the ``m`` task rows of ``prog`` stacked in ``ws`` (with
+    their Jacobians at ``x``) until ``‖r‖ <= target``; a step that raises ``‖r‖`` by more than rounding (1e-14) is
+    undone, and one that does not lower it ends the steps. Returns ``(‖r‖, steps taken, whether ‖r‖ stopped
+    falling)``."""
     n = x.shape[0]
     e = np.sqrt(squared_norm(ws[3], m))
-    for _ in range(steps):
-        if e <= target:
-            break
-        if not bounded_step(x, ws[4][:m], ws[3][:m], RESTORE_DAMPING, lower, upper, box_wrap, Jc, A, L, y, dx):
-            break
+    taken = 0
+    while taken < steps and e > target:
+        if not bounded_step(x, ws[4][:m], ws[3][:m], RESTORE_DAMPING, lower, upper, box_wrap, Jc[:m], A, L, y, dx):
+            return e, taken, True
+        taken += 1
         before[:] = x
         for i in range(n):
             x[i] += dx[i]
@@ -180,9 +207,39 @@ def _restore(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps
                 linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
             else:
                 e = e_new
-            break
+            return e, taken, True
         e = e_new
-    return e
+    return e, taken, False
+
+
+@numba.njit(cache=True)
+def _restore(x, lower, upper, box_wrap, kin, prog, near, ws, m, A, L, y, dx, Jc, steps, target, before):
+    """Gauss-Newton least-norm steps on the task residuals until ``‖r‖ <= target`` (coordinates held at a bound
+    the step would push through are left out of it; ``A, L`` flat scratch; ``before (n,)`` scratch); a step that
+    raises ``‖r‖`` by more than rounding is undone. ``ws`` holds the task's rows and Jacobians at ``x``.
+
+    The steps leave out the one-sided blocks clear at ``x`` (``near``: a copy of ``prog``'s block table, where
+    they are set aside): a clear row has no Jacobian, so it takes no part in a step, and steps this short seldom
+    enter it — but its evaluation is the cost of a step (a collision term's rows, almost all clear). The whole
+    task is evaluated after them, and steps on every row go on from there if one was entered.
+    Returns ``(‖r‖, whether ws holds the Jacobians at x)``: on return ``ws`` holds the whole task's residuals
+    at ``x``, and without its Jacobians (and frame Jacobians) when the last evaluation was the check of the set-aside
+    rows (:data:`~framework.costs.kernels.JACOBIANS_FROM_POSES` adds them)."""
+    if steps == 0 or np.sqrt(squared_norm(ws[3], m)) <= target:
+        return np.sqrt(squared_norm(ws[3], m)), True
+    mn = _set_aside_clear(prog[0], ws[3], ws[4], near)
+    if mn < m:
+        kept = (near, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
+        _, _, stalled = _restoring_steps(x, lower, upper, box_wrap, kin, kept, ws, mn, A, L, y, dx, Jc, steps,
+                                             target, before)
+        linearize(x, TASK, kin, prog, ws, NO, COMPUTE)  # every row again, the set-aside ones included
+        e = np.sqrt(squared_norm(ws[3], m))
+        if e <= target or stalled:
+            return e, False
+        # a step entered a set-aside row: on with every row
+        linearize(x, TASK, kin, prog, ws, YES, JACOBIANS_FROM_POSES)
+    e, _, _ = _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before)
+    return e, True
 
 
 @numba.njit(cache=True)
@@ -521,6 +578,8 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                borrow(own_tangent[12]), borrow(own_tangent[13]), borrow(own_tangent[14]), borrow(own_tangent[15]),
                borrow(own_tangent[16]), borrow(own_tangent[17]), borrow(own_tangent[18]))
     nb = prog[0].shape[0]
+    own_near = prog[0].copy()  # the restoring steps' block table (one-sided blocks clear at their start set aside)
+    near = borrow(own_near)
     first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
     target = np.zeros(q)  # kicked norms' aims
     _regularizer_rows(prog, first)
@@ -729,12 +788,15 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
             entered = not unblocked and _entered(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta,
                                                  Jb, cb, sb)
-            e = _restore(xt, lower, upper, box_wrap, kin, prog, tri, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym,
-                         dxm, Jc, RESTORE_STEPS, feasible, before)
-            linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
+            e, current = _restore(xt, lower, upper, box_wrap, kin, prog, near, tri, m, Am.reshape(Am.size),
+                                  Lm.reshape(Lm.size), ym, dxm, Jc, RESTORE_STEPS, feasible, before)
+            linearize(xt, REGULARIZERS, kin, prog, tri_r, current, REUSE)
             evaluations += 1
             Gt = level_value(REGULARIZERS, prog, tri_r[3], YES)
             if e <= feasible and Gt < G:
+                if not current:  # the Jacobians at the step taken (a rejected trial needs none)
+                    linearize(xt, TASK, kin, prog, tri, YES, JACOBIANS_FROM_POSES)
+                    linearize(xt, REGULARIZERS, kin, prog, tri_r, YES, REUSE)
                 accepted_step = True
                 break
             if entered:  # the step entered one-sided rows clear at x: solve it again holding them
@@ -786,8 +848,10 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if mu > MU_MAX or trust < 1e-12 or (kinked and failed >= KINK_FAILURES):
                 status = STALLED
                 break
-    _restore(x, lower, upper, box_wrap, kin, prog, cur, m, Am.reshape(Am.size), Lm.reshape(Lm.size), ym, dxm, Jc,
-             RESTORE_STEPS, 0.0, before)  # to the last bit
+    _, current = _restore(x, lower, upper, box_wrap, kin, prog, near, cur, m, Am.reshape(Am.size), Lm.reshape(Lm.size),
+                          ym, dxm, Jc, RESTORE_STEPS, 0.0, before)  # to the last bit
+    if not current:
+        linearize(x, TASK, kin, prog, cur, YES, JACOBIANS_FROM_POSES)
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     objective_derivatives(REGULARIZERS, prog, cur_r, smoothing, NO, g, H, chain_ptr, chain_idx, gr, Hr, mu_r,
                           0.0, state)
@@ -798,7 +862,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri, own, own_tangent)
+    keep_alive(own_cur, own_tri, own, own_tangent, own_near)
     return status
 
 
