@@ -22,7 +22,7 @@ import numba
 import numpy as np
 import pinocchio as pin
 
-from .kinematics import PopulationKinematics
+from .kinematics import PopulationKinematics, fk_one
 from .robot import Robot
 from .solids import ROW, solid_distance
 
@@ -49,8 +49,8 @@ class BoundingSpheres:
     """Every geometry of a Pinocchio geometry model in one sphere on its body, and the model's collision pairs.
 
     Attributes:
-        kinematics: the compiled forward kinematics of the bodies' frames (``None``: every geometry is fixed in
-            the world).
+        kinematics: the compiled forward kinematics of the bodies' frames (none: every geometry is fixed in the
+            world).
         slots: ``(g,)`` each geometry's body, as an index into ``kinematics.frames`` (``-1``: fixed in the world).
         centers: ``(g, 3)`` sphere centres in their body's frame (the world's for slot ``-1``) [m].
         radii: ``(g,)`` radii [m] (``inf``: unbounded).
@@ -59,7 +59,7 @@ class BoundingSpheres:
         first, second: ``(pairs,)`` the geometry indices of each collision pair.
     """
 
-    kinematics: PopulationKinematics | None
+    kinematics: PopulationKinematics
     slots: np.ndarray
     centers: np.ndarray
     radii: np.ndarray
@@ -71,14 +71,9 @@ class BoundingSpheres:
     def near_pairs(self, x: np.ndarray, margin: float) -> np.ndarray:
         """Indices of the collision pairs whose spheres are closer than ``margin`` [m] (plus :data:`SLACK`) at
         joint coordinates ``x`` ``(n,)``: every pair that can be closer than ``margin``."""
-        if self.kinematics is None:
-            positions, rotations = np.zeros((1, 3)), np.eye(3)[None]
-        else:
-            poses = self.kinematics(np.ascontiguousarray(x, dtype=float)[None])
-            positions, rotations = poses.positions[0], poses.rotations[0]
         out = np.empty(self.first.size, dtype=np.int64)
-        count = _near_pairs(positions, rotations, self.slots, self.centers, self.radii, self.codes, self.solids,
-                            self.first, self.second, float(margin) + SLACK, out)
+        count = _near_pairs(np.ascontiguousarray(x, dtype=float), *self.kinematics.tables, self.slots, self.centers,
+                            self.radii, self.codes, self.solids, self.first, self.second, float(margin) + SLACK, out)
         return out[:count]
 
 
@@ -99,7 +94,7 @@ def bounding_spheres(robot: Robot, geometry: pin.GeometryModel,
         center, radii[k] = bounding_sphere(g.geometry)
         centers[k] = g.placement.act(center)
     slots = np.array([slot.get(int(g.parentJoint), -1) for g in objects], dtype=np.int64)
-    kinematics = robot.kinematics(tuple(robot.body_frame(j) for j in bodies)) if bodies else None
+    kinematics = robot.kinematics(tuple(robot.body_frame(j) for j in bodies))
     pairs = geometry.collisionPairs
     return BoundingSpheres(kinematics, slots, centers, radii, codes, rows.ravel(),
                            np.array([p.first for p in pairs], dtype=np.int64),
@@ -107,10 +102,15 @@ def bounding_spheres(robot: Robot, geometry: pin.GeometryModel,
 
 
 @numba.njit(cache=True)
-def _near_pairs(positions, rotations, slots, centers, radii, codes, solids, first, second, margin, out) -> int:
-    """The pairs ``(first[p], second[p])`` that can be closer than ``margin``, into ``out``; returns their count:
-    those whose spheres are, unless a solid of the pair is clear of the other's sphere by ``margin``.
-    ``positions (k, 3)``, ``rotations (k, 3, 3)``: the bodies' world poses."""
+def _near_pairs(x, jint, jgeo, fslot, fgeo, slots, centers, radii, codes, solids, first, second, margin,
+                out) -> int:
+    """The pairs ``(first[p], second[p])`` that can be closer than ``margin`` at joint coordinates ``x (n,)``
+    (the bodies' poses from the FK tables ``jint, jgeo, fslot, fgeo``, in one compiled call: a check's broad
+    phase cost more in Python around the FK than in it), into ``out``; returns their count: those whose spheres
+    are, unless a solid of the pair is clear of the other's sphere by ``margin``."""
+    poses, placements = np.empty((fslot.shape[0], 12)), np.empty((jint.shape[0], 12))
+    fk_one(x, jint, jgeo, fslot, fgeo, poses, placements)
+    positions, rotations = poses[:, 9:], poses[:, :9]
     world = np.empty((centers.shape[0], 3))
     for g in range(centers.shape[0]):
         s = slots[g]
@@ -118,8 +118,8 @@ def _near_pairs(positions, rotations, slots, centers, radii, codes, solids, firs
             if s < 0:
                 world[g, i] = centers[g, i]
             else:
-                world[g, i] = positions[s, i] + rotations[s, i, 0] * centers[g, 0] \
-                    + rotations[s, i, 1] * centers[g, 1] + rotations[s, i, 2] * centers[g, 2]
+                world[g, i] = positions[s, i] + rotations[s, 3 * i] * centers[g, 0] \
+                    + rotations[s, 3 * i + 1] * centers[g, 1] + rotations[s, 3 * i + 2] * centers[g, 2]
     gradient = np.empty(3)
     count = 0
     for p in range(first.shape[0]):
@@ -144,12 +144,12 @@ def _near_pairs(positions, rotations, slots, centers, radii, codes, solids, firs
 @numba.njit(cache=True)
 def _solid_gap(g, point, slots, positions, rotations, solids, gradient) -> float:
     """Signed distance [m] of the world ``point`` ``(3,)`` to geometry ``g``'s solid (its row in its body's
-    frame)."""
+    frame); ``positions (k, 3)`` and ``rotations (k, 9)`` (row-major) are the bodies' world poses."""
     x, y, z = point[0], point[1], point[2]
     s = slots[g]
     if s >= 0:  # the point in the body's frame: Rᵀ(point − p)
         v0, v1, v2 = x - positions[s, 0], y - positions[s, 1], z - positions[s, 2]
-        x = rotations[s, 0, 0] * v0 + rotations[s, 1, 0] * v1 + rotations[s, 2, 0] * v2
-        y = rotations[s, 0, 1] * v0 + rotations[s, 1, 1] * v1 + rotations[s, 2, 1] * v2
-        z = rotations[s, 0, 2] * v0 + rotations[s, 1, 2] * v1 + rotations[s, 2, 2] * v2
+        x = rotations[s, 0] * v0 + rotations[s, 3] * v1 + rotations[s, 6] * v2
+        y = rotations[s, 1] * v0 + rotations[s, 4] * v1 + rotations[s, 7] * v2
+        z = rotations[s, 2] * v0 + rotations[s, 5] * v1 + rotations[s, 8] * v2
     return solid_distance(x, y, z, solids, ROW * g, gradient)
