@@ -186,14 +186,13 @@ def _set_aside_clear(bint, r, J, near) -> int:
 def _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before):
     """Up to ``steps`` Gauss-Newton least-norm steps on the ``m`` task rows of ``prog`` stacked in ``ws`` (with
     their Jacobians at ``x``) until ``‖r‖ <= target``; a step that raises ``‖r‖`` by more than rounding (1e-14) is
-    undone, and one that does not lower it ends the steps. Returns ``(‖r‖, steps taken, whether ‖r‖ stopped
-    falling)``."""
+    undone, and one that does not lower it ends the steps. Returns ``(‖r‖, whether ‖r‖ stopped falling)``."""
     n = x.shape[0]
     e = np.sqrt(squared_norm(ws[3], m))
     taken = 0
     while taken < steps and e > target:
         if not bounded_step(x, ws[4][:m], ws[3][:m], RESTORE_DAMPING, lower, upper, box_wrap, Jc[:m], A, L, y, dx):
-            return e, taken, True
+            return e, True
         taken += 1
         before[:] = x
         for i in range(n):
@@ -207,9 +206,9 @@ def _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, J
                 linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
             else:
                 e = e_new
-            return e, taken, True
+            return e, True
         e = e_new
-    return e, taken, False
+    return e, False
 
 
 @numba.njit(cache=True)
@@ -222,23 +221,23 @@ def _restore(x, lower, upper, box_wrap, kin, prog, near, ws, m, A, L, y, dx, Jc,
     they are set aside): a clear row has no Jacobian, so it takes no part in a step, and steps this short seldom
     enter it — but its evaluation is the cost of a step (a collision term's rows, almost all clear). The whole
     task is evaluated after them, and steps on every row go on from there if one was entered.
-    Returns ``(‖r‖, whether ws holds the Jacobians at x)``: on return ``ws`` holds the whole task's residuals
-    at ``x``, and without its Jacobians (and frame Jacobians) when the last evaluation was the check of the set-aside
+    Returns ``(‖r‖, whether ws holds the Jacobians at x)``: on return ``ws`` holds the whole task's residuals at
+    ``x``, without their Jacobians (and frame Jacobians) when the last evaluation was the check of the set-aside
     rows (:data:`~framework.costs.kernels.JACOBIANS_FROM_POSES` adds them)."""
     if steps == 0 or np.sqrt(squared_norm(ws[3], m)) <= target:
         return np.sqrt(squared_norm(ws[3], m)), True
     mn = _set_aside_clear(prog[0], ws[3], ws[4], near)
     if mn < m:
         kept = (near, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
-        _, _, stalled = _restoring_steps(x, lower, upper, box_wrap, kin, kept, ws, mn, A, L, y, dx, Jc, steps,
-                                             target, before)
+        _, stalled = _restoring_steps(x, lower, upper, box_wrap, kin, kept, ws, mn, A, L, y, dx, Jc, steps, target,
+                                      before)
         linearize(x, TASK, kin, prog, ws, NO, COMPUTE)  # every row again, the set-aside ones included
         e = np.sqrt(squared_norm(ws[3], m))
         if e <= target or stalled:
             return e, False
         # a step entered a set-aside row: on with every row
         linearize(x, TASK, kin, prog, ws, YES, JACOBIANS_FROM_POSES)
-    e, _, _ = _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before)
+    e, _ = _restoring_steps(x, lower, upper, box_wrap, kin, prog, ws, m, A, L, y, dx, Jc, steps, target, before)
     return e, True
 
 
