@@ -133,7 +133,8 @@ class Problem:
         x = self.robot.middle.copy()
         program.refresh()
         program.reference(x)
-        return np.clip(x, self.robot.lower, self.robot.upper)
+        np.maximum(x, self.robot.lower, out=x)  # np.clip, without its ~5 µs of dispatch
+        return np.minimum(x, self.robot.upper, out=x)
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, k)`` unweighted term values for a population ``X`` ``(pop, n)``."""

@@ -116,9 +116,11 @@ class Hybrid(IKSolver):
         opening = None
         if not (problem.checks_collisions or o.global_iterations or request.callback):
             # the common case: the engine from the start; it is the answer when it reaches the task and the
-            # weighted sum does not decide (priorities, or no regularizers: no multipliers to weigh)
+            # weighted sum does not decide (priorities, or no regularizers: no multipliers to weigh), or decides
+            # for it (the point on the task also minimizes the weighted sum: see _search, 3.)
             opening = solve_local(problem.program, x0, draws, first, deadline=request.deadline)
-            if opening.reached and (problem.priorities or opening.multipliers is None):
+            if opening.reached and (problem.priorities or opening.multipliers is None
+                                    or reaching_is_optimal(problem.program, opening.x, opening.multipliers)):
                 return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,
                                self._report(start, budget, opening.restarts, opening.regularized, request),
                                task_errors=opening.task_errors, values=opening.values)
