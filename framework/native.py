@@ -36,6 +36,13 @@ def square(buffer, k):
 
 
 @numba.njit(cache=True, inline="always")
+def matrix(buffer, rows, cols):
+    """A ``(rows, cols)`` C-contiguous view (without an owner) of the first entries of the flat ``buffer``, as
+    :func:`square`."""
+    return numba.carray(_address_as_pointer(buffer.ctypes.data), (rows, cols), buffer.dtype)
+
+
+@numba.njit(cache=True, inline="always")
 def borrow_kin(kin):
     """:func:`borrow` over the kinematic tables ``(jint, jgeo, fslot, fgeo)``."""
     return borrow(kin[0]), borrow(kin[1]), borrow(kin[2]), borrow(kin[3])

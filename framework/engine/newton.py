@@ -35,7 +35,9 @@ import numba
 import numpy as np
 
 from ..costs.blocks import (
+    COORDINATES,
     HALFSIN,
+    IPTR,
     KIND,
     LEVEL,
     NORM,
@@ -66,7 +68,7 @@ from ..costs.kernels import (
     term_values,
     workspace,
 )
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, matrix, square
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve, null_space, symmetric_eigen, trust_region_step
 from .reach import bounded_step, held, project, rows_of, squared_norm
@@ -118,7 +120,7 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
     ``gr, mu (rows,)`` and ``Hr (rows, rows)`` are scratch at least as large as the largest block; norms shorter
     than ``majorize_below`` get their majorizing curvature (see ``rho_derivatives``); blocks ``b`` whose
     ``states[b]`` is ``HELD`` or ``KICKED`` are left out (norms held at zero as constraints; zeros: none)."""
-    bint, bflt, params = prog[0], prog[1], prog[2]
+    bint, bflt, params, idx = prog[0], prog[1], prog[2], prog[3]
     out, Jf, r, Jr = ws[0], ws[2], ws[3], ws[4]
     n = g.shape[0]
     g[:] = 0.0
@@ -134,6 +136,17 @@ def objective_derivatives(level, prog, ws, smoothing, curvature, g, H, chain_ptr
             continue
         rho_derivatives(bint[b, RHO], bflt[b, SCALE], r, row, rows, smoothing, gr, Hr, majorize_below)
         value += w * rho_value(bint[b, RHO], bflt[b, SCALE], r, row, rows)
+        if bint[b, KIND] == COORDINATES:  # unit rows (motion): Jᵀ scatters onto the block's coordinates
+            q = bint[b, IPTR]
+            for a in range(rows):
+                g[idx[q + a]] += w * gr[a]
+            for a in range(rows):
+                for c in range(rows):
+                    h = w * Hr[a, c]
+                    if h != 0.0:
+                        H[idx[q + a], idx[q + c]] += h
+            row += rows  # (no curvature: linear in x)
+            continue
         for i in range(n):
             acc = 0.0
             for a in range(rows):
@@ -565,7 +578,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     mq = m + q  # task rows, then regularizer rows (held at zero) in the active set
     own = (np.empty(q), np.zeros((q, n)), np.empty(q), np.zeros((q, n)), np.empty(n), np.empty((n, n)),
            np.empty((mq, mq)), np.empty((mq, mq)), np.empty(max(mq, n)), np.empty(n), np.zeros(mq), np.zeros(mq),
-           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + mq, n + mq)), np.empty((n + mq, n + mq + 1)),
+           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + mq) ** 2), np.empty((n + mq) * (n + mq + 1)),
            np.empty(n + mq), np.empty(n + mq), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
            np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(mq, dtype=np.int64), np.empty((mq, n)),
            np.zeros(mq), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
@@ -674,7 +687,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             break
         row = ROW0  # the Lagrangian's Hessian: H − Σ λ_b ∇²r_b over the task blocks (into K's free block)
         k = nf + ma
-        Kv, Mv, rv, sv = K[:k, :k], M[:k, : k + 1], rhs[:k], sol[:k]
+        Kv, Mv, rv, sv = square(K, k), matrix(M, k, k + 1), rhs[:k], sol[:k]  # contiguous: the LU's loops vectorize
         Hlb[:, :] = H
         for b in range(bint.shape[0]):
             if bint[b, LEVEL] != 1:
