@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -40,13 +41,20 @@ class Motion(Term):
             previous = np.array(previous, dtype=float)
         except (TypeError, ValueError):
             raise TaskError(f"previous configuration of group {self.group!r} must be numbers") from None
-        if previous.ndim != 1 or not np.isfinite(previous).all():
+        if previous.ndim != 1 or not all(map(math.isfinite, previous.tolist())):
             raise TaskError(f"previous configuration of group {self.group!r} must be a finite vector")
         self.previous = previous
         self._touch()
 
     def indices(self, robot: Robot) -> np.ndarray:
-        return robot.group(self.group)
+        """The group's coordinates in ``robot``'s search vector (read-only; remembered per robot: a path reads
+        them at every waypoint)."""
+        cache = self.__dict__.get("_indices")
+        if cache is None or cache[0] is not robot or cache[1] != self.group:
+            idx = np.array(robot.group(self.group))
+            idx.setflags(write=False)
+            cache = self._indices = (robot, self.group, idx)
+        return cache[2]
 
     def previous_values(self, robot: Robot) -> np.ndarray:
         idx = self.indices(robot)
