@@ -19,6 +19,7 @@ installed ``example-robot-data`` resolves so).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -324,7 +325,7 @@ class RobotShape:
         pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then the closest flagged
         pair's, or NaN (not measured) when there is none.
         """
-        if not (np.isfinite(margin) and margin >= 0.0):
+        if not (math.isfinite(margin) and margin >= 0.0):
             raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
         x = self.robot.check_population(x)[0]
         q = None  # Pinocchio's configuration, made when coal needs it (not when the broad phase finds no pair near)

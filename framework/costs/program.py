@@ -162,6 +162,9 @@ class _Layout:
         self._bflt: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_checked_exactly = tuple(bool(terms[k].checks_collisions) for k in self.block_term[task].tolist())
+        #: ``(block, angular)`` of every task block, and of those the exact collision check does not replace
+        self.task_limits = tuple(enumerate(self.task_angular))
+        self.task_limits_unchecked = tuple((k, a) for k, a in self.task_limits if not self.task_checked_exactly[k])
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
 
@@ -240,8 +243,9 @@ class Program:
         """Whether every task block's error (block order, from :meth:`task_errors`) is within
         ``angle_tolerance`` [rad] for orientations and ``tolerance`` [m] for the others; with ``exact_checked``
         (the exact collision check has the last word) the collision terms' sphere rows are not asked."""
-        for e, angular, exact in zip(errors, self.task_angular, self.task_checked_exactly):
-            if e > (angle_tolerance if angular else tolerance) and not (exact_checked and exact):
+        layout = self.layout
+        for k, angular in layout.task_limits_unchecked if exact_checked else layout.task_limits:
+            if errors[k] > (angle_tolerance if angular else tolerance):
                 return False
         return True
 
