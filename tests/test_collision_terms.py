@@ -298,3 +298,24 @@ def test_the_newton_phase_stops_on_an_obstacle_it_starts_clear_of(sphere_arm):
             assert result.success
             np.testing.assert_allclose(result.configuration, expected, atol=1e-7)
 
+
+
+def test_within_leaves_the_contact_rows_to_the_exact_check_only_when_told(rng):
+    """``Program.within`` against a direct reading of its rule: every task block within its tolerance (angular
+    for orientations), the collision blocks skipped only when the exact check has the last word."""
+    robot = fw.load_robot("youbot_dual")
+    shape = fw.RobotShape(robot)
+    program = fw.Problem(robot, fw.Pose("arm1_ee", np.eye(4)) + fw.SelfCollision(shape, margin=0.005)).program
+    exact, angular = np.array(program.task_checked_exactly), np.array(program.task_angular)
+    assert exact.sum() >= 30 and angular.sum() == 1 and (~exact).sum() == 2  # a position, a rotation, the pairs
+    limits = np.where(angular, 1e-4, 1e-6)
+    seen = set()
+    for _ in range(300):
+        errors = np.zeros(exact.size)
+        hit = rng.choice(exact.size, size=rng.integers(0, 3), replace=False)
+        errors[hit] = rng.choice([1e-7, 1e-5, 1e-3], size=hit.size)
+        plain, checked = bool(np.all(errors <= limits)), bool(np.all((errors <= limits) | exact))
+        assert program.within(errors.tolist(), 1e-6, 1e-4) == plain
+        assert program.within(errors, 1e-6, 1e-4, exact_checked=True) == checked
+        seen.add((plain, checked))
+    assert seen == {(True, True), (False, True), (False, False)}

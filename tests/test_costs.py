@@ -296,6 +296,19 @@ def test_problem_previous_is_where_the_motion_terms_measure_from(robot, rng):
     assert Problem(robot, Position("arm1_ee", [0.5, 0, 0.4])).previous is None
 
 
+def test_motion_reads_each_robot_s_group_and_keeps_it_read_only(robot, rng):
+    """A Motion term remembers its group's coordinates per robot: used with a second robot whose group differs
+    (the fixed-platform youBot: no base), its values are that robot's (against numpy on the group's slice)."""
+    fixed = fw.load_robot("youbot_dual")
+    term = Motion("arm2", np.zeros(5))
+    for r in (robot, fixed, robot):
+        X = r.random_configurations(rng, 20)
+        np.testing.assert_allclose(Problem(r, term).values(X)[:, 0], np.linalg.norm(X[:, r.group("arm2")], axis=1),
+                                   rtol=0, atol=1e-12)
+        assert not term.indices(r).flags.writeable
+    assert not np.array_equal(term.indices(robot), term.indices(fixed))
+
+
 def test_jacobians_on_a_real_robot_with_continuous_joints(erd, rng):
     """PR2 from example-robot-data (torso + both arms, continuous forearm and wrist rolls): every block's Jacobian
     against central differences of its residual, and a pose's position residual against Pinocchio."""
