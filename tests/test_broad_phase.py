@@ -58,6 +58,12 @@ def _close_pairs(robot, geometry, x, margin) -> set[int]:
     return {k for k, r in enumerate(data.distanceResults) if r.min_distance < margin}
 
 
+def _coal_clear(robot, geometry):
+    """``clear(x)``: whether coal's collision test on every pair (no broad phase, no distances) finds no contact."""
+    data, geometry_data = robot.model.createData(), geometry.createData()
+    return lambda x: not pin.computeCollisions(robot.model, data, geometry, geometry_data, robot.to_pinocchio(x), True)
+
+
 def _on_contact_boundaries(robot, clear, rng, count):
     """Configurations where a pair just touches: bisection between a clear configuration and random ones in
     contact (``clear(x)``: whether coal finds no contact)."""
@@ -80,7 +86,7 @@ def _on_contact_boundaries(robot, clear, rng, count):
 def test_near_pairs_hold_every_pair_closer_than_the_margin(which, pr2, youbot, rng):
     robot, shape = pr2 if which == "pr2" else youbot
     spheres = shape._bounding_spheres(shape.geometry)  # links' boxes and cylinders measured as solids
-    configurations = _on_contact_boundaries(robot, lambda x: not shape.check(x).colliding, rng, 8)
+    configurations = _on_contact_boundaries(robot, _coal_clear(robot, shape.geometry), rng, 8)
     configurations += list(robot.random_configurations(rng, 8))
     checked = 0
     for x in configurations:
