@@ -299,7 +299,6 @@ def test_the_newton_phase_stops_on_an_obstacle_it_starts_clear_of(sphere_arm):
             np.testing.assert_allclose(result.configuration, expected, atol=1e-7)
 
 
-
 def test_within_leaves_the_contact_rows_to_the_exact_check_only_when_told(rng):
     """``Program.within`` against a direct reading of its rule: every task block within its tolerance (angular
     for orientations), the collision blocks skipped only when the exact check has the last word."""

@@ -119,7 +119,7 @@ class Hybrid(IKSolver):
             # weighted sum does not decide (priorities, or no regularizers: no multipliers to weigh), or decides
             # for it (the point on the task also minimizes the weighted sum: see _search, 3.)
             opening = solve_local(problem.program, x0, draws, first, deadline=request.deadline)
-            if opening.reached and (problem.priorities or opening.multipliers is None
+            if opening.reached and (problem.priorities  # (no multipliers: optimal, nothing was regularized)
                                     or reaching_is_optimal(problem.program, opening.x, opening.multipliers)):
                 return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,
                                self._report(start, budget, opening.restarts, opening.regularized, request),
