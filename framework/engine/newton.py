@@ -90,6 +90,9 @@ RESTORE_DAMPING = 1e-14
 #: A coordinate that a Newton step carries through its bound within this fraction of the step is held where it
 #: is (near its bound) for that step.
 PIN = 0.1
+#: Backtracking without the blocking rows, a trial that enters a one-sided row clear at ``x`` is cut to that row's
+#: boundary by its linearization (instead of halved), within these fractions of the trial step.
+BOUNDARY_MIN, BOUNDARY_MAX = 0.05, 0.95
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
 #: A norm regularizer (``ρ = s‖r‖``) shorter than this [its residual's unit: rad or m] is held at zero as a
@@ -313,7 +316,11 @@ def _step_taken(x, xt, box_wrap, delta) -> None:
 def _entered(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta, Jb, cb, sb) -> bool:
     """Whether the trial ``xt`` violates a one-sided row that is clear at ``x`` (``r_x`` zero, not held): the most
     violated such row's Jacobian at ``xt`` into ``Jb``, its linearized value at ``x`` into ``cb`` and its violated
-    side into ``sb`` (``±1``; ``0`` for the other rows not held)."""
+    side into ``sb`` (``±1``; ``0`` for the other rows not held).
+
+    A curved row (a collision row's closest sphere pair changes along the step) can extrapolate to the violated
+    side at ``x``, where it is clear: held at that value, it would push the step back out of a contact ``x`` is
+    not in. It is held where ``x`` is instead (``cb = 0``: no step into it, to first order)."""
     worst, pick = 0.0, -1
     for a in range(hinge.shape[0]):
         if held_now[a] or not hinge[a]:
@@ -328,9 +335,27 @@ def _entered(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta, Jb, cb, sb) -> 
     for i in range(x.shape[0]):
         Jb[pick, i] = J[pick, i]
         c -= J[pick, i] * delta[i]
-    cb[pick] = c
     sb[pick] = 1.0 if r[pick] > 0.0 else -1.0
+    cb[pick] = c if c * sb[pick] < 0.0 else 0.0
     return True
+
+
+@numba.njit(cache=True)
+def _boundary_fraction(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta) -> float:
+    """The fraction of the step ``x -> xt`` at which the first one-sided row clear at ``x`` (not held) that ``xt``
+    violates reaches its boundary, by each such row's linearization at ``xt`` (``delta (n,)`` scratch); ``1`` when
+    none is violated, or none is clear at ``x`` by its linearization."""
+    _step_taken(x, xt, box_wrap, delta)
+    tau = 1.0
+    for a in range(hinge.shape[0]):
+        if held_now[a] or not hinge[a] or r_x[a] != 0.0 or r[a] == 0.0:
+            continue
+        c = r[a]
+        for i in range(x.shape[0]):
+            c -= J[a, i] * delta[i]
+        if c * r[a] < 0.0:  # the row's zero lies on the step
+            tau = min(tau, c / (c - r[a]))
+    return tau
 
 
 @numba.njit(cache=True)
@@ -800,6 +825,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
             entered = not unblocked and _entered(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta,
                                                  Jb, cb, sb)
+            # backtracking without the blocking rows: to the boundary of the first row the trial entered
+            tau = _boundary_fraction(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta) \
+                if unblocked else 1.0
             e, current = _restore(xt, lower, upper, box_wrap, kin, prog, near, tri, m, Am.reshape(Am.size),
                                   Lm.reshape(Lm.size), ym, dxm, Jc, RESTORE_STEPS, feasible, before)
             linearize(xt, REGULARIZERS, kin, prog, tri_r, current, REUSE)
@@ -813,7 +841,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                 break
             if entered:  # the step entered one-sided rows clear at x: solve it again holding them
                 break
-            alpha *= 0.5
+            alpha *= 0.5 if tau >= 1.0 else min(max(tau, BOUNDARY_MIN), BOUNDARY_MAX)
         if accepted_step:
             gain = G - Gt
             cur, tri = tri, cur
