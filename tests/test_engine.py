@@ -217,3 +217,45 @@ def test_time_budget_stops_the_engine():
     result = fw.solve(problem, time_budget=0.003, seed=0)
     assert not result.success and result.stop_reason == "time_budget"
     assert result.settings["restart_count"] > 0
+
+
+def test_a_blocking_row_is_cut_at_its_boundary_and_never_held_past_x():
+    """The Newton phase's one-sided rows a trial step enters. Three rows clear at x = 0, violated at the trial
+    x + dx, each linear: f_a(q) = c_a + g_a·q on its violated side. The boundary fraction is where the first of
+    them crosses zero along the step (found here by bisection on the functions themselves); a row whose
+    linearization at the trial puts x on its violated side is held where x is (``cb = 0``), the others at their
+    linearized value at x."""
+    from framework.engine.newton import _boundary_fraction, _entered
+
+    n, m = 3, 4
+    x, dx = np.zeros(n), np.array([1.0, -0.5, 0.25])
+    xt = x + dx
+    c = np.array([-0.2, -0.05, 0.1, -0.3])  # row 2 is "violated at x" by its linearization; row 3 is held
+    G = np.array([[0.5, 0.0, 0.0], [0.0, -0.4, 0.0], [0.2, 0.0, 0.0], [0.0, 0.0, 2.0]])
+
+    def f(a: int, q: np.ndarray) -> float:
+        return c[a] + G[a] @ q
+
+    r = np.array([max(f(a, xt), 0.0) for a in range(m)])  # hinge rows at the trial: zero when clear
+    assert np.all(r > 0)
+    hinge, r_x = np.ones(m, dtype=bool), np.zeros(m)
+    held = np.array([False, False, False, True])
+    box_wrap, delta = np.zeros(n, dtype=bool), np.empty(n)
+    tau = _boundary_fraction(x, xt, box_wrap, hinge, r_x, held, r, G, delta)
+    crossings = []
+    for a in (0, 1):  # rows clear at x: where f_a reaches zero along the step, by bisection
+        lo, hi = 0.0, 1.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if f(a, x + mid * dx) < 0 else (lo, mid)
+        crossings.append(lo)
+    assert tau == pytest.approx(min(crossings), abs=1e-12)  # row 1 at 0.25, before row 0 at 0.4
+    assert _boundary_fraction(x, x + 0.2 * dx, box_wrap, hinge, r_x, held, np.zeros(m), G, delta) == 1.0
+
+    Jb, cb, sb = np.zeros((m, n)), np.full(m, np.nan), np.zeros(m)
+    r_only = np.where(np.arange(m) == 2, r, 0.0)  # only row 2 entered: its linearization says x is violated
+    assert _entered(x, xt, box_wrap, hinge, r_x, held, r_only, G, delta, Jb, cb, sb)
+    assert sb[2] == 1.0 and cb[2] == 0.0 and np.array_equal(Jb[2], G[2])
+    r_only = np.where(np.arange(m) == 0, r, 0.0)  # only row 0: clear at x by its linearization
+    assert _entered(x, xt, box_wrap, hinge, r_x, held, r_only, G, delta, Jb, cb, sb)
+    assert cb[0] == pytest.approx(c[0]) and sb[0] == 1.0
