@@ -15,9 +15,12 @@ and the rest of the step solved again (clipped, the step would leave the task's 
 One-sided rows (distance bands, cones, collision rows) are inequalities: a row with a Jacobian is held as an
 equality until its multiplier lets it go; a row clear where a step starts has no Jacobian there, so when a trial
 step enters one and is rejected, the step is solved again holding that row with its Jacobian at the trial
-(a *blocking* row: without it, the step would enter the contact again at every halving). A collision row is the
-smallest distance over sphere pairs, with a Jacobian that jumps where the closest pair changes: after
-:data:`KINK_FAILURES` failed iterations in a row with a one-sided row held, the phase stops.
+(a *blocking* row: without it, the step would enter the contact again at every halving), at its value at ``x``
+by that linearization — or where ``x`` is, when a curved row extrapolates to its violated side at ``x``, which is
+clear. When the blocking rows are let go, the backtracking cuts a trial that enters one of them at its boundary
+(by its linearization) instead of halving it. A collision row is the smallest distance over sphere pairs, with a
+Jacobian that jumps where the closest pair changes: after :data:`KINK_FAILURES` failed iterations in a row with a
+one-sided row held, the phase stops.
 A norm regularizer at its kink (a joint group at rest: ``‖r‖`` below :data:`HOLD_BELOW`) is an active set of its
 own: held at zero as equality rows (out of ``G``'s derivatives) while its multiplier stays within the norm's
 slope ``w s`` (the subgradient condition of an optimum at zero), else moved off zero against the multiplier and
