@@ -9,7 +9,6 @@ has ``nq >= n`` entries. Every conversion between the two lives in this module: 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -22,6 +21,7 @@ import pinocchio as pin
 from .errors import ConfigurationError, LimitsError, UnknownFrameError, UnknownJointError, UnsupportedJointError
 from .joints import JointKind
 from .kinematics import FramePoses, PopulationKinematics
+from .validate import all_finite
 
 #: Limits beyond this magnitude are treated as "no limit" (URDF continuous joints, planar bases).
 UNBOUNDED = 1e10
@@ -259,7 +259,7 @@ class Robot:
                 f"{what} must have shape (pop, {self.n}) or ({self.n},) for robot {self.name!r} "
                 f"(coordinates {', '.join(self.coordinate_names)}); got {np.shape(X)}"
             )
-        if finite and not (all(map(math.isfinite, X.ravel().tolist())) if X.size <= 64 else np.isfinite(X).all()):
+        if finite and not all_finite(X):
             rows = np.unique(np.nonzero(~np.isfinite(X))[0])
             raise ConfigurationError(f"{what} holds NaN or inf (rows {rows[:5].tolist()})")
         return X

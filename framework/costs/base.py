@@ -29,6 +29,7 @@ import numpy as np
 from ..errors import TaskError
 from ..kinematics import FramePoses
 from ..robot import Robot
+from ..validate import all_finite
 
 from .program import Block, Program, unique_labels
 
@@ -265,7 +266,7 @@ def as_vector(value: Sequence[float] | np.ndarray, size: int, what: str | Callab
         raise TaskError(f"{_name(what)} must be {size} numbers; got {value!r}") from None
     if v.shape != (size,):
         raise TaskError(f"{_name(what)} must have shape ({size},); got {v.shape}")
-    if not all(map(math.isfinite, v.tolist())):
+    if not all_finite(v):
         raise TaskError(f"{_name(what)} holds NaN or inf: {v.tolist()}")
     return v
 

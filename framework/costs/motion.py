@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from ..errors import TaskError
 from ..robot import Robot
+from ..validate import all_finite
 from . import blocks as B
 from .base import Term
 from .program import Block, coordinates_block
@@ -41,7 +41,7 @@ class Motion(Term):
             previous = np.array(previous, dtype=float)
         except (TypeError, ValueError):
             raise TaskError(f"previous configuration of group {self.group!r} must be numbers") from None
-        if previous.ndim != 1 or not all(map(math.isfinite, previous.tolist())):
+        if previous.ndim != 1 or not all_finite(previous):
             raise TaskError(f"previous configuration of group {self.group!r} must be a finite vector")
         self.previous = previous
         self._touch()
