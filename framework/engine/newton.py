@@ -315,6 +315,16 @@ def _step_taken(x, xt, box_wrap, delta) -> None:
         delta[i] = wrap_angle(d) if box_wrap[i] else d
 
 
+@numba.njit(cache=True, inline="always")
+def _value_at_start(r, J, delta, a) -> float:
+    """Row ``a``'s value at the step's start by its linearization at the trial: ``r_a − J_a · delta``
+    (``delta``: the step, :func:`_step_taken`)."""
+    c = r[a]
+    for i in range(delta.shape[0]):
+        c -= J[a, i] * delta[i]
+    return c
+
+
 @numba.njit(cache=True)
 def _entered(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta, Jb, cb, sb) -> bool:
     """Whether the trial ``xt`` violates a one-sided row that is clear at ``x`` (``r_x`` zero, not held): the most
@@ -334,10 +344,9 @@ def _entered(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta, Jb, cb, sb) -> 
     if pick < 0:
         return False
     _step_taken(x, xt, box_wrap, delta)
-    c = r[pick]
+    c = _value_at_start(r, J, delta, pick)
     for i in range(x.shape[0]):
         Jb[pick, i] = J[pick, i]
-        c -= J[pick, i] * delta[i]
     sb[pick] = 1.0 if r[pick] > 0.0 else -1.0
     cb[pick] = c if c * sb[pick] < 0.0 else 0.0
     return True
@@ -353,9 +362,7 @@ def _boundary_fraction(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta) -> fl
     for a in range(hinge.shape[0]):
         if held_now[a] or not hinge[a] or r_x[a] != 0.0 or r[a] == 0.0:
             continue
-        c = r[a]
-        for i in range(x.shape[0]):
-            c -= J[a, i] * delta[i]
+        c = _value_at_start(r, J, delta, a)
         if c * r[a] < 0.0:  # the row's zero lies on the step
             tau = min(tau, c / (c - r[a]))
     return tau
