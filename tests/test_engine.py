@@ -91,6 +91,32 @@ def test_motion_is_minimized_on_the_task(rng):
     assert np.abs(null @ gradient).max() < 1e-3 * np.abs(gradient).max()
 
 
+def test_dependent_task_rows_are_held_in_least_squares_not_left_where_they_start():
+    """Paper 000's target 1 with the first hand's Position term given twice: the task's rows are dependent, so the
+    Newton phase's KKT matrix is singular whatever the damping of its Hessian block (collision rows do this when
+    two bodies' closest pairs press along one direction). From the same point on the task, the phase reaches the
+    least motion the problem without the copy reaches (to 1e-12), on the task by Pinocchio's FK; left singular,
+    the phase stays at its start (0.4354 against 0.3969)."""
+    robot = fw.load_robot("youbot_dual_mobile")
+    q_prev = np.r_[0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.pi / 2, np.pi / 2,
+                   -np.pi / 4, np.pi / 4, 0]
+    t1, t2 = np.array([0.5, -0.2, 0.45]), np.array([0.7, -0.5, 0.25])
+    motion = 0.1 * fw.Motion("base", q_prev) + 0.4 * fw.Motion("arm1", q_prev) + 0.4 * fw.Motion("arm2", q_prev)
+    task = 1.2 * fw.Position("arm1_ee", t1) + 1.2 * fw.Position("arm2_ee", t2)
+    single = Problem(robot, task + motion)
+    double = Problem(robot, task + 1.2 * fw.Position("arm1_ee", t1, name="arm1 again") + motion)
+    x0 = solve_local(single.program, q_prev, 0, LocalSettings(tolerance=1e-12, regularize=False)).x
+    settings = LocalSettings(tolerance=1e-12)
+    one, two = solve_local(single.program, x0, 0, settings), solve_local(double.program, x0, 0, settings)
+    regularizers = Problem(robot, motion)
+    start, least, found = (float(regularizers.cost(x[None])[0]) for x in (x0, one.x, two.x))
+    assert two.reached and two.regularized == "converged"
+    assert least < start - 0.03  # the optimum is well away from the start
+    assert found == pytest.approx(least, abs=1e-12)
+    for frame, target in (("arm1_ee", t1), ("arm2_ee", t2)):
+        assert np.linalg.norm(robot.frame_placement(two.x, frame).translation - target) < 1e-12
+
+
 def _base_shift(base: float, arms: float) -> tuple[Problem, np.ndarray, np.ndarray]:
     """The dual youBot's two hands at their places after the base alone moved (1 cm, -4 mm) from ``q_prev``, with
     motion from ``q_prev`` weighted ``base`` and ``arms`` (each arm): ``(problem, q_prev, shifted)``."""

@@ -20,7 +20,9 @@ by that linearization — or where ``x`` is, when a curved row extrapolates to i
 clear. When the blocking rows are let go, the backtracking cuts a trial that enters one of them at its boundary
 (by its linearization) instead of halving it. A collision row is the smallest distance over sphere pairs, with a
 Jacobian that jumps where the closest pair changes: after :data:`KINK_FAILURES` failed iterations in a row with a
-one-sided row held, the phase stops.
+one-sided row held, the phase stops. When the step's system is singular with no blocking row held, the task's
+rows are dependent (two collision rows pressing along one direction): damping ``H`` cannot make it regular, so
+from then on the task's rows are held in least squares, as held norms are (:data:`HELD_DAMPING`).
 A norm regularizer at its kink (a joint group at rest: ``‖r‖`` below :data:`HOLD_BELOW`) is an active set of its
 own: held at zero as equality rows (out of ``G``'s derivatives) while its multiplier stays within the norm's
 slope ``w s`` (the subgradient condition of an optimum at zero), else moved off zero against the multiplier and
@@ -658,7 +660,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     mu, trust, last_step = MU_START, TRUST_START, 0.0
     status, iterations, accepted = ITERATIONS, 0, 0
     bint, bflt = prog[0], prog[1]
-    unblocked, failed = False, 0
+    unblocked, failed, redundant = False, 0, False
     pinned = np.zeros(n, dtype=np.bool_)  # coordinates the last step at x carried through a bound: moved onto it
     shift, gs = np.zeros(n), np.empty(n)  # (their moves, and the gradient g + H shift the others see)
     before = np.empty(n)  # a restoring step's start
@@ -765,10 +767,12 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         for a in range(ma):
             for c in range(ma):
                 Kv[nf + a, nf + c] = 0.0
-            if a >= mr:  # a held norm's rows, regularized: with the task they may be redundant (a joint group
-                Kv[nf + a, nf + a] = -HELD_DAMPING  # at rest leaves the rest of the task to fewer coordinates)
-            if a < own_rows:
+            if a >= mr or (redundant and a < own_rows):  # a held norm's rows, regularized: with the task they may
+                Kv[nf + a, nf + a] = -HELD_DAMPING  # be redundant (a joint group at rest leaves the rest of the task
+            if a < own_rows:  # to fewer coordinates); the task's own rows too once they were found dependent
                 rv[nf + a] = -cur[3][arow[a]]
+                if redundant:  # (+ δλ, as the held norms: exactly on the rows once λ settles)
+                    rv[nf + a] += HELD_DAMPING * lam[arow[a]]
             elif a < mr:
                 rv[nf + a] = -cb[arow[a]]
             else:  # a held norm to zero, a kicked one to its aim (+ δλ: exactly there once λ settles)
@@ -780,6 +784,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             if mr > own_rows:  # the blocking rows' Jacobians (from trial points) made it singular: let them go,
                 blocking[:] = False  # and backtrack without them until a step is taken
                 unblocked = True
+                continue
+            if not redundant and own_rows > 0:  # the task's rows are dependent (two contact rows along one
+                redundant = True  # direction): held in least squares from here on (damping H cannot help)
                 continue
             mu *= 10.0
             if mu > MU_MAX:
