@@ -318,3 +318,47 @@ def test_within_leaves_the_contact_rows_to_the_exact_check_only_when_told(rng):
         assert program.within(errors, 1e-6, 1e-4, exact_checked=True) == checked
         seen.add((plain, checked))
     assert seen == {(True, True), (False, True), (False, False)}
+
+
+def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
+    """``widen_margins``, which the Newton phase reads to linearize blocking contact rows at x: the collision
+    blocks with their margins widened by b read, row for row, what a SelfCollision term built with margin m + b
+    reads (dual youBot, 60 random configurations); a row clear at m but within b of it reads its gap − b, and its
+    Jacobian is the gap's (central finite differences). A copy that left the margins as they are would read 0
+    on those rows, with no Jacobian."""
+    from framework.costs.collision_blocks import widen_margins
+    from framework.costs.kernels import residuals_at
+    from framework.engine.local import residual_arrays
+    from framework.taskfile import load_task
+
+    task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
+    robot = task.robot
+    shape = fw.RobotShape(robot)
+    margin, band = 0.005, 0.05
+    narrow = fw.Problem(robot, fw.SelfCollision(shape, margin=margin)).program
+    wide = fw.Problem(robot, fw.SelfCollision(shape, margin=margin + band)).program
+    params = np.empty_like(narrow.prog[2])
+    widen_margins(narrow.prog[0], narrow.prog[2], band, params)
+    widened = (narrow.prog[0], narrow.prog[1], params, *narrow.prog[3:])
+    (r, J), (rw, Jw), (re, Je) = residual_arrays(narrow), residual_arrays(narrow), residual_arrays(wide)
+    near, h = 0, 1e-7
+    for x in robot.random_configurations(rng, 60):
+        m = residuals_at(x, -1, narrow.kin, narrow.prog, r, J)
+        assert residuals_at(x, -1, narrow.kin, widened, rw, Jw) == m
+        residuals_at(x, -1, wide.kin, wide.prog, re, Je)
+        np.testing.assert_allclose(rw[:m], re[:m], atol=1e-15)
+        np.testing.assert_allclose(Jw[:m], Je[:m], atol=1e-14)
+        for a in np.flatnonzero((r[:m] == 0.0) & (rw[:m] < -1e-4)):  # clear at m, within the band
+            near += 1
+            assert 0.0 < rw[a] + band < band
+            fd = np.empty(robot.n)
+            for i in range(robot.n):
+                e = np.zeros(robot.n)
+                e[i] = h
+                residuals_at(x + e, -1, narrow.kin, widened, re, Je)
+                plus = re[a]
+                residuals_at(x - e, -1, narrow.kin, widened, re, Je)
+                fd[i] = (plus - re[a]) / (2 * h)
+            residuals_at(x, -1, narrow.kin, widened, rw, Jw)
+            np.testing.assert_allclose(Jw[a], fd, atol=1e-6)
+    assert near >= 10

@@ -8,7 +8,7 @@ import numba
 import numpy as np
 
 from ..solids import solid_distance
-from .blocks import KIND, PPTR, SPHERES, hinge_row, on_frame, world_point
+from .blocks import KIND, PPTR, SOLIDS, SPHERES, hinge_row, on_frame, world_point
 
 
 @numba.njit(cache=True)
@@ -157,3 +157,22 @@ def contact_row(kind, out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, 
         spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S)
     else:
         solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S)
+
+
+@numba.njit(cache=True)
+def is_contact(kind) -> bool:
+    """Whether blocks of ``kind`` are contact rows (``SPHERES``, ``SOLIDS``: a signed distance held above a margin)."""
+    return kind == SPHERES or kind == SOLIDS
+
+
+@numba.njit(cache=True)
+def widen_margins(bint, params, band, out) -> None:
+    """``out``: ``params`` with every contact block's margin widened by ``band`` [m]. Evaluated with them, a contact
+    row clear of its margin by ``gap < band`` reads ``gap − band`` with the Jacobian of ``gap`` (its closest pair's),
+    where with the margin alone it reads 0 with none: how near a clear contact is, and which way it comes."""
+    out[:] = params
+    for b in range(bint.shape[0]):
+        if bint[b, KIND] == SPHERES:
+            out[bint[b, PPTR] + 2] += band
+        elif bint[b, KIND] == SOLIDS:
+            out[bint[b, PPTR] + 16] += band

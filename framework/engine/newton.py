@@ -17,8 +17,12 @@ equality until its multiplier lets it go; a row clear where a step starts has no
 step enters one and is rejected, the step is solved again holding that row with its Jacobian at the trial
 (a *blocking* row: without it, the step would enter the contact again at every halving), at its value at ``x``
 by that linearization — or where ``x`` is, when a curved row extrapolates to its violated side at ``x``, which is
-clear. When the blocking rows are let go, the backtracking cuts a trial that enters one of them at its boundary
-(by its linearization) instead of halving it. A collision row is the smallest distance over sphere pairs, with a
+clear. When the blocking rows stop a step (no step along them, or every halving rejected), the contact rows
+among them are linearized again at ``x`` once (:data:`BAND`: their gap and the closest pair's Jacobian there);
+when that finds no step either and each of them presses (its multiplier), the phase has converged on the
+contact — otherwise a phase crept along it, a cycle of entering, holding and letting go per tiny gain. Blocking
+rows let go, the backtracking then cuts a trial that enters one of them at its boundary (by its linearization)
+instead of halving it. A collision row is the smallest distance over sphere pairs, with a
 Jacobian that jumps where the closest pair changes: after :data:`KINK_FAILURES` failed iterations in a row with a
 one-sided row held, the phase stops. When the step's system is singular with no blocking row held, the task's
 rows are dependent (two collision rows pressing along one direction): damping ``H`` cannot make it regular, so
@@ -55,6 +59,7 @@ from ..costs.blocks import (
     rho_value,
     wrap_angle,
 )
+from ..costs.collision_blocks import is_contact, widen_margins
 from ..costs.curvature import block_curvature
 from ..costs.kernels import (
     COMPUTE,
@@ -98,6 +103,10 @@ PIN = 0.1
 #: Backtracking without the blocking rows, a trial that enters a one-sided row clear at ``x`` is cut to that row's
 #: boundary by its linearization (instead of halved), within these fractions of the trial step.
 BOUNDARY_MIN, BOUNDARY_MAX = 0.05, 0.95
+#: Blocking contact rows that stop a step are linearized again at ``x`` when their gap there is below this [m]
+#: (the gap and the closest pair's Jacobian: :func:`~framework.costs.collision_blocks.widen_margins`); the others
+#: are let go.
+BAND = 1e-3
 
 CONVERGED, STALLED, DEADLINE, ITERATIONS, NOT_APPLICABLE = 0, 1, 2, 3, 4
 #: A norm regularizer (``ρ = s‖r‖``) shorter than this [its residual's unit: rad or m] is held at zero as a
@@ -273,17 +282,19 @@ def _max_rows(prog) -> int:
 
 @numba.njit(cache=True)
 def _hinge_rows(prog, m):
-    """``(m,)`` True for the task rows of one-sided blocks (distances, cones, collision rows: zero when clear)."""
+    """``(m,)`` True for the task rows of one-sided blocks (distances, cones, collision rows: zero when clear),
+    and ``(m,)`` True for the contact rows among them (collision rows: signed distances above a margin)."""
     bint = prog[0]
-    hinge = np.zeros(m, dtype=np.bool_)
+    hinge, contact = np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_)
     row = 0
     for b in range(bint.shape[0]):
         if bint[b, LEVEL] != 1:
             continue
         for a in range(bint[b, ROWS]):
             hinge[row + a] = is_hinge(bint[b, KIND])
+            contact[row + a] = is_contact(bint[b, KIND])
         row += bint[b, ROWS]
-    return hinge
+    return hinge, contact
 
 
 @numba.njit(cache=True)
@@ -368,6 +379,27 @@ def _boundary_fraction(x, xt, box_wrap, hinge, r_x, held_now, r, J, delta) -> fl
         if c * r[a] < 0.0:  # the row's zero lies on the step
             tau = min(tau, c / (c - r[a]))
     return tau
+
+
+@numba.njit(cache=True)
+def _blocking_at_x(x, kin, band_prog, ws, rn, Jn, contact, blocking, Jb, cb) -> bool:
+    """The blocking rows linearized at ``x`` instead of at the trials they came from: the contact rows
+    evaluated with their margins widened by :data:`BAND` (``band_prog``; poses reused from ``ws``, at ``x``),
+    each blocking row within the band held at its boundary by that linearization (``Jb``, ``cb``), the others let
+    go. ``rn (rows,)``, ``Jn (rows, n)`` scratch. Returns whether a blocking row is kept."""
+    wsn = (ws[0], ws[1], ws[2], rn, Jn, ws[5], ws[6])
+    linearize(x, TASK, kin, band_prog, wsn, NO, REUSE)
+    linearize(x, TASK, kin, band_prog, wsn, YES, JACOBIANS_FROM_POSES)
+    kept = False
+    for a in range(blocking.shape[0]):
+        if blocking[a]:
+            if contact[a] and rn[a] < 0.0:
+                cb[a] = rn[a] + BAND
+                Jb[a, :] = Jn[a, :]
+                kept = True
+            else:
+                blocking[a] = False
+    return kept
 
 
 @numba.njit(cache=True)
@@ -601,7 +633,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     n = x.shape[0]
     m, q = rows_of(prog, TASK), rows_of(prog, REGULARIZERS)
     stats[0], stats[1], stats[2] = 0, 0, 0
-    hinge = _hinge_rows(prog, m)
+    hinge, contact = _hinge_rows(prog, m)
     equalities = 0
     for a in range(m):
         equalities += 0 if hinge[a] else 1
@@ -629,6 +661,17 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     nb = prog[0].shape[0]
     own_near = prog[0].copy()  # the restoring steps' block table (one-sided blocks clear at their start set aside)
     near = borrow(own_near)
+    # the contact rows near x (the blocks with their margins widened by BAND; their rows rn, Jn at x once
+    # band_at_x): made only with contact rows
+    near_contact, band_at_x = False, False
+    for a in range(m):
+        near_contact = near_contact or contact[a]
+    ws_rows = own_cur[3].shape[0] if near_contact else 0
+    own_band = (np.empty(prog[2].shape[0] if near_contact else 0), np.empty(ws_rows), np.zeros((ws_rows, n)))
+    if near_contact:
+        widen_margins(prog[0], prog[2], BAND, own_band[0])
+    band_prog = (prog[0], prog[1], borrow(own_band[0]), prog[3], prog[4], prog[5], prog[6])
+    rn, Jn = borrow(own_band[1]), borrow(own_band[2])
     first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
     target = np.zeros(q)  # kicked norms' aims
     _regularizer_rows(prog, first)
@@ -824,8 +867,19 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
                     lam[arow[a]] = -sv[nf + a]
                 if _kick_due(prog, first, state, lam, m):
                     continue
-            if mr > own_rows:  # stopped by the blocking rows: backtrack without them
-                blocking[:] = False
+            if mr > own_rows:  # stopped by the blocking rows (linearized at trial points)
+                if near_contact and not band_at_x:  # once more with their linearization at x
+                    band_at_x = True
+                    if _blocking_at_x(x, kin, band_prog, cur, rn, Jn, contact, blocking, Jb, cb):
+                        continue
+                elif band_at_x:  # no step with them linearized at x: converged if each presses (its multiplier)
+                    pressing = True
+                    for c in range(own_rows, mr):
+                        pressing = pressing and -sv[nf + c] * sb[arow[c]] <= 0.0
+                    if pressing:
+                        status = CONVERGED
+                        break
+                blocking[:] = False  # backtrack without them
                 unblocked = True
                 continue
             status = CONVERGED
@@ -865,7 +919,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             cur_r, tri_r = tri_r, cur_r
             _moved(x, xt, box_wrap, blocking, Jb, cb, delta)
             x[:] = xt
-            unblocked = False
+            unblocked, band_at_x = False, False
             pinned[:] = False
             shift[:] = 0.0
             failed = 0
@@ -892,7 +946,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for a in range(m):  # the candidates written by _entered become blocking rows
                 if not held_now[a] and sb[a] != 0.0:
                     blocking[a] = True
-        elif mr > own_rows:  # no step along the blocking rows (linearized at trial points): backtrack without them
+        elif mr > own_rows:  # no step along the blocking rows (linearized at trial points): once more with their
+            if near_contact and not band_at_x:  # linearization at x, then backtrack without them
+                band_at_x = True
+                if _blocking_at_x(x, kin, band_prog, cur, rn, Jn, contact, blocking, Jb, cb):
+                    continue
             blocking[:] = False
             unblocked = True
         else:
@@ -919,7 +977,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri, own, own_tangent, own_near)
+    keep_alive(own_cur, own_tri, own, own_tangent, own_near, own_band)
     return status
 
 
