@@ -86,6 +86,12 @@ def is_hinge(kind) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
+def is_contact(kind) -> bool:
+    """Whether a block kind is a collision row (``SPHERES``, ``SOLIDS``: a signed distance held above a margin)."""
+    return kind == SPHERES or kind == SOLIDS
+
+
+@numba.njit(cache=True, inline="always")
 def wrap_angle(d):
     """``d`` wrapped to ``[−π, π)``."""
     return d - TWO_PI * np.floor((d + np.pi) / TWO_PI)

@@ -160,12 +160,6 @@ def contact_row(kind, out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, 
 
 
 @numba.njit(cache=True)
-def is_contact(kind) -> bool:
-    """Whether blocks of ``kind`` are contact rows (``SPHERES``, ``SOLIDS``: a signed distance held above a margin)."""
-    return kind == SPHERES or kind == SOLIDS
-
-
-@numba.njit(cache=True)
 def widen_margins(bint, params, band, out) -> None:
     """``out``: ``params`` with every contact block's margin widened by ``band`` [m]. Evaluated with them, a contact
     row clear of its margin by ``gap < band`` reads ``gap − band`` with the Jacobian of ``gap`` (its closest pair's),

@@ -26,13 +26,12 @@ from .blocks import (
     RHO,
     ROWS,
     SCALE,
-    SOLIDS,
-    SPHERES,
     TERM,
     TOL,
     TOL_ANGULAR,
     TOL_LINEAR,
     WEIGHT,
+    is_contact,
     is_hinge,
     rho_value,
 )
@@ -114,7 +113,7 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
             row += bint[b, ROWS]
             continue
         kind = bint[b, KIND]
-        if kind == SPHERES or kind == SOLIDS:
+        if is_contact(kind):
             contact_row(kind, out, Jf, bint[b, FA], bint[b, FB], params, bint[b, PPTR], r, Jr, row, want_jacobian,
                         x.shape[0], E9)
             row += bint[b, ROWS]

@@ -54,12 +54,13 @@ from ..costs.blocks import (
     ROWS,
     SCALE,
     WEIGHT,
+    is_contact,
     is_hinge,
     rho_derivatives,
     rho_value,
     wrap_angle,
 )
-from ..costs.collision_blocks import is_contact, widen_margins
+from ..costs.collision_blocks import widen_margins
 from ..costs.curvature import block_curvature
 from ..costs.kernels import (
     COMPUTE,
@@ -663,9 +664,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     near = borrow(own_near)
     # the contact rows near x (the blocks with their margins widened by BAND; their rows rn, Jn at x once
     # band_at_x): made only with contact rows
-    near_contact, band_at_x = False, False
-    for a in range(m):
-        near_contact = near_contact or contact[a]
+    near_contact, band_at_x = contact.any(), False
     ws_rows = own_cur[3].shape[0] if near_contact else 0
     own_band = (np.empty(prog[2].shape[0] if near_contact else 0), np.empty(ws_rows), np.zeros((ws_rows, n)))
     if near_contact:

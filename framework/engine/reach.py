@@ -25,7 +25,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, SOLIDS, SPHERES, is_hinge
+from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, is_contact, is_hinge
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
@@ -135,7 +135,7 @@ def without_contacts(bint):
     lazy = bint.copy()
     found = False
     for b in range(bint.shape[0]):
-        if bint[b, LEVEL] == LEVEL_TASK and (bint[b, KIND] == SPHERES or bint[b, KIND] == SOLIDS):
+        if bint[b, LEVEL] == LEVEL_TASK and is_contact(bint[b, KIND]):
             lazy[b, LEVEL] = 0
             found = True
     return lazy, found
