@@ -44,6 +44,13 @@ def rotation_from(target: Sequence[float] | np.ndarray, what: str) -> np.ndarray
     raise TaskError(f"{what} must be a (3, 3) rotation matrix or an (x, y, z, w) quaternion; got shape {t.shape}")
 
 
+def rotation_defects(R: np.ndarray) -> np.ndarray:
+    """``bool (B,)``: which of ``R (B, 3, 3)`` (finite) are no rotation matrix (``|RᵀR − I| > 1e-6`` or
+    ``det R <= 0``; the test :func:`rotation_from` makes of one)."""
+    defect = np.abs(np.einsum("bki,bkj->bij", R, R) - np.eye(3)).max(axis=(1, 2))
+    return (defect > 1e-6) | (np.linalg.det(R) <= 0)
+
+
 @numba.njit(cache=True)
 def _rotation_defect(R) -> int:
     """0 for a rotation matrix (``|RᵀR − I| <= 1e-6``, ``det R > 0``), 1 for NaN/inf, 2 otherwise."""

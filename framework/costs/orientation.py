@@ -12,10 +12,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..errors import TaskError
 from ..robot import Robot
-from ..rotations import rotation_target
+from ..rotations import rotation_defects, rotation_target
 from . import blocks as B
-from .base import Term
+from .base import Term, finite_rows
 from .program import Block
 
 
@@ -44,6 +45,18 @@ class Orientation(Term):
         """Change the target rotation (world frame): a matrix, or a quaternion with its order named."""
         self.target = rotation_target(target, quat_xyzw, quat_wxyz, f"orientation target of {self.frame!r}")
         self._touch()
+
+    def target_parameters(self, robot: Robot, targets) -> np.ndarray:
+        """``(B, 9)`` row-major target rotations of a batch: ``(B, 3, 3)`` matrices are validated at once (as
+        :meth:`set_target` validates one); other forms one by one."""
+        if not (isinstance(targets, np.ndarray) and targets.ndim == 3 and targets.shape[1:] == (3, 3)):
+            return super().target_parameters(robot, targets)
+        what = f"orientation targets of {self.frame!r}"
+        R = finite_rows(targets, (3, 3), what)
+        bad = np.flatnonzero(rotation_defects(R))
+        if bad.size:
+            raise TaskError(f"{what}: item {bad[0]} is not a rotation matrix (RᵀR = I, det > 0)")
+        return R.reshape(-1, 9)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         return (Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, self.target.ravel(), tolerance=B.TOL_ANGULAR),)

@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..robot import Robot
-from ..rotations import pack_transform, rotation_from
+from ..rotations import pack_transform, rotation_defects, rotation_from
 from . import blocks as B
 from .base import Term, as_vector, finite_rows
 from .program import Block
@@ -98,9 +98,7 @@ class Pose(Term):
         what = f"pose targets of {self.frame!r}"
         T = finite_rows(targets, (4, 4), what)
         R = T[:, :3, :3]
-        defect = np.abs(np.einsum("bki,bkj->bij", R, R) - np.eye(3)).max(axis=(1, 2))
-        bad = np.flatnonzero((np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > 1e-9) | (defect > 1e-6)
-                             | (np.linalg.det(R) <= 0))
+        bad = np.flatnonzero((np.abs(T[:, 3] - [0.0, 0.0, 0.0, 1.0]).max(axis=1) > 1e-9) | rotation_defects(R))
         if bad.size:
             raise TaskError(f"{what}: item {bad[0]} is not a homogeneous transform (last row [0, 0, 0, 1], a "
                             f"rotation with RᵀR = I and det > 0)")
