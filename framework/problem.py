@@ -128,7 +128,7 @@ class Problem:
         middle on coordinates none covers), clipped to the box; ``None`` when no regularizer has one.
         The natural warm start."""
         program = self.program
-        if not program.layout.references:
+        if not program.layout.reference_slots[0].size:
             return None
         x = self.robot.middle.copy()
         program.refresh()

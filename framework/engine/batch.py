@@ -5,8 +5,11 @@ for one problem: the item's parameters (its targets) are written into the progra
 drives the task from the item's start (restarting from draws of the item's stream, if restarts are on) and, when the task
 is reached, :func:`~.newton.regularize` minimizes the regularizers on it. The loop releases the GIL, so
 threads run chunks of a batch on all cores, each with its own copy of the program's parameters.
+*Chained*, the items are the waypoints of a path: each starts at the previous one's answer, which is also the
+reference its regularizers measure motion from (a tracking step, :mod:`framework.tracking`).
 
-:func:`descend_items` is its Python side; :func:`in_chunks` runs work over chunks of a batch on threads.
+:func:`descend_items` is its Python side (:func:`follow_items` for a chain); :func:`in_chunks` runs work over chunks
+of a batch on threads.
 """
 
 from __future__ import annotations
@@ -31,14 +34,18 @@ CHUNK = 256
 
 
 @numba.njit(cache=True, nogil=True)
-def descend(items, X, restarts, streams, P, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
-            max_iterations, stall, budget_ns, polish, regularize, regularize_iterations, smoothing, task_rows, E, V,
-            codes, counts, spent_ns) -> None:
+def descend(items, X, restarts, streams, P, chained, reference, lower, upper, box_wrap, kin, prog, tol_linear,
+            tol_angular, max_iterations, stall, budget_ns, polish, regularize, regularize_iterations, smoothing,
+            task_rows, E, V, codes, regularized, counts, spent_ns) -> int:
     """Solve the items ``items`` of a batch in place, one after the other.
 
     Args:
         items: ``int64 (k,)`` item indices.
         X: ``(B, n)`` starts; on return each solved item's configuration.
+        chained: the items are consecutive waypoints of a path: item ``items[t]`` starts at the answer of
+            ``items[t - 1]`` (the first at its own row of ``X``), its regularizers' reference is written from that
+            start (``params[reference[0]] = x[reference[1]]``: :attr:`~framework.costs.program.Program.
+            reference_slots`), and the loop stops at the first item that misses the task.
         restarts: random restarts allowed per item; streams: ``uint64 (B,)`` each item's restart stream
             (:mod:`~framework.engine.draws`), advanced.
         P: ``(B, p)`` each item's program parameters (written into ``prog[2]`` before its solve).
@@ -46,39 +53,55 @@ def descend(items, X, restarts, streams, P, lower, upper, box_wrap, kin, prog, t
         budget_ns: ``int64 (B,)`` nanoseconds left per item (``<= 0`` in the first entry: no budget).
         regularize: minimize the regularizers after reaching the task; task_rows: the task's residual rows.
         E: ``(B, blocks)`` out: task block errors; V: ``(B, terms)`` out: term values.
-        codes: ``int64 (B,)`` out: :func:`reach`'s status; counts: ``int64 (B, 3)`` iterations, evaluations
+        codes: ``int64 (B,)`` out: :func:`reach`'s status; regularized: ``int64 (B,)`` out:
+            :func:`~.newton.regularize`'s status (``-1``: not run); counts: ``int64 (B, 3)`` iterations, evaluations
             and restarts, added to; spent_ns: ``int64 (B,)`` time spent, added to.
+
+    Returns:
+        The number of items solved: all of them, or (chained) the position of the first that missed the task.
     """
     params = prog[2]
     stats = np.empty(3, dtype=np.int64)
     multipliers = np.zeros(task_rows)
+    slots, coordinates = reference
     for t in range(items.shape[0]):
         i = items[t]
         params[:] = P[i]
         begin = monotonic_ns()
         deadline = begin + budget_ns[i] if budget_ns[i] > 0 else 0
         x = X[i]
+        if chained:
+            if t > 0:
+                x[:] = X[items[t - 1]]
+            for j in range(slots.shape[0]):
+                params[slots[j]] = x[coordinates[j]]
         code = reach(x, NO, restarts, streams[i : i + 1], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
                      max_iterations[i], stall, deadline, polish, E[i], V[i], stats)
         counts[i, 0] += stats[0]
         counts[i, 1] += stats[1]
         counts[i, 2] += stats[2]
+        regularized[i] = -1
         if code == REACHED and regularize:
             multipliers[:] = 0.0
-            newton.regularize(x, lower, upper, box_wrap, kin, prog, smoothing, regularize_iterations, deadline,
-                              multipliers, E[i], V[i], stats)
+            regularized[i] = newton.regularize(x, lower, upper, box_wrap, kin, prog, smoothing,
+                                               regularize_iterations, deadline, multipliers, E[i], V[i], stats)
             counts[i, 1] += stats[1]
         codes[i] = code
         spent_ns[i] += monotonic_ns() - begin
+        if chained and code != REACHED:
+            return t
+    return items.shape[0]
 
 
 class BatchState(NamedTuple):
-    """The arrays :func:`descend` fills: configurations, errors, values, status, counts and time per item."""
+    """The arrays :func:`descend` fills: configurations, errors, values, status of both phases, counts and time
+    per item."""
 
     X: np.ndarray
     E: np.ndarray
     V: np.ndarray
     codes: np.ndarray
+    regularized: np.ndarray
     counts: np.ndarray
     spent_ns: np.ndarray
 
@@ -86,8 +109,8 @@ class BatchState(NamedTuple):
     def start(cls, program: Program, X0: np.ndarray) -> BatchState:
         B = X0.shape[0]
         return cls(np.array(X0, dtype=float, order="C"), np.zeros((B, program.task_block_rows.size)),
-                   np.zeros((B, len(program.terms))), np.full(B, -1, dtype=np.int64), np.zeros((B, 3), np.int64),
-                   np.zeros(B, dtype=np.int64))
+                   np.zeros((B, len(program.terms))), np.full(B, -1, dtype=np.int64), np.full(B, -1, np.int64),
+                   np.zeros((B, 3), np.int64), np.zeros(B, dtype=np.int64))
 
 
 def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
@@ -97,20 +120,33 @@ def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.
     ``streams`` ``uint64 (B,)``: each item's restart stream (used when ``settings.restarts``); ``time_budget``:
     seconds per item, counted from its first descent. Threads may run it at once on disjoint items.
     """
-    lower, upper, box_wrap = search_box(program)
     items = np.ascontiguousarray(items, dtype=np.int64)
-    left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     if time_budget is None:
         budget = np.zeros(state.X.shape[0], dtype=np.int64)
     else:
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
+    _descend(program, P, state, items, settings, streams, budget, False)
+
+
+def follow_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
+                 streams: np.ndarray) -> int:
+    """Run :func:`descend` chained over ``items``, consecutive waypoints of a path (the first starts at its row of
+    ``state.X``); returns how many were solved before the first that missed the task (all: ``len(items)``)."""
+    items = np.ascontiguousarray(items, dtype=np.int64)
+    return _descend(program, P, state, items, settings, streams, np.zeros(state.X.shape[0], dtype=np.int64), True)
+
+
+def _descend(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
+             streams: np.ndarray, budget: np.ndarray, chained: bool) -> int:
+    lower, upper, box_wrap = search_box(program)
+    left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     prog = list(program.prog)
     prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    descend(items, state.X, settings.max_restarts, streams, P, lower, upper, box_wrap, program.kin,
-            tuple(prog),
-            settings.tolerance, settings.angular, left, settings.stall, budget, settings.polish,
-            bool(settings.regularize and program.has_regularizers), settings.regularize_iterations,
-            settings.smoothing, program.task_rows, state.E, state.V, state.codes, state.counts, state.spent_ns)
+    return descend(items, state.X, settings.max_restarts, streams, P, chained, program.layout.reference_slots,
+                   lower, upper, box_wrap, program.kin, tuple(prog), settings.tolerance, settings.angular, left,
+                   settings.stall, budget, settings.polish, bool(settings.regularize and program.has_regularizers),
+                   settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V,
+                   state.codes, state.regularized, state.counts, state.spent_ns)
 
 
 def in_chunks(work: Callable[[np.ndarray], None], count: int, *, workers: int | None = None,

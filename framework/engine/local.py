@@ -175,6 +175,12 @@ def solve_local(
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
 
 
+def regularized_status(code: int) -> str | None:
+    """The name of :func:`~.newton.regularize`'s status ``code`` (``LocalResult.regularized``; ``None`` for
+    ``-1``: the phase did not run)."""
+    return None if code < 0 else _REGULARIZE_STATUS[int(code)]
+
+
 def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK, *,
               out: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Stacked residuals ``(m,)`` and Jacobians ``(m, n)`` of the blocks of ``level`` at ``x`` (``-1``: levels

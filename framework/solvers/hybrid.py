@@ -101,10 +101,10 @@ class Hybrid(IKSolver):
         if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers):
             return None
         x0, start = start_configuration(problem, request, o.warm_start)
-        settings = local_settings(request, o, default_iterations(request))
-        if start == "middle" or not o.restarts:
-            return BatchPlan(x0, settings)
-        return BatchPlan(x0, _in_basin(settings))
+        budget = default_iterations(request)
+        settings = local_settings(request, o, budget)
+        report = self._report(start, budget, 0, None, request)
+        return BatchPlan(x0, settings if start == "middle" or not o.restarts else _in_basin(settings), report=report)
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options

@@ -83,11 +83,13 @@ class BatchPlan(NamedTuple):
     it compiled over a whole batch: the first start ``x0 (n,)``, the settings of the descent from it (with the
     random restarts that follow it when ``first.restarts``), and whether the solver goes on when the engine misses
     the task (``escalates``: such items are solved by the solver itself; otherwise the engine's best miss is the
-    answer)."""
+    answer). ``report``: the settings a result the engine phase answers reports (:attr:`IKResult.settings`), but
+    its restart count and its regularizer phase's status (``restart_count``, ``regularized``: per item)."""
 
     x0: np.ndarray
     first: LocalSettings
     escalates: bool = True
+    report: Mapping[str, Any] = {}
 
 
 @dataclass(frozen=True)

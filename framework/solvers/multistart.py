@@ -10,6 +10,7 @@ first, whatever the weights.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -94,9 +95,10 @@ class MultistartLM(IKSolver):
     kind = "local engine"
 
     def batch_plan(self, problem, request: Request) -> BatchPlan:
-        x0, _ = start_configuration(problem, request, self.options.warm_start)
-        settings = local_settings(request, self.options, default_iterations(request))
-        return BatchPlan(x0, settings, escalates=False)
+        x0, start = start_configuration(problem, request, self.options.warm_start)
+        iterations = default_iterations(request)
+        settings = local_settings(request, self.options, iterations)
+        return BatchPlan(x0, settings, escalates=False, report=self._report(start, iterations, 0, None))
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
@@ -105,7 +107,11 @@ class MultistartLM(IKSolver):
                              deadline=request.deadline)
         if request.callback is not None:
             request.callback(1, float(problem.cost(result.x)[0]), result.x.copy())
-        settings = {"start": start, "max_iterations": iterations, "restart_count": result.restarts,
-                    "regularized": result.regularized, **self.options.__dict__}
         return Outcome(result.x, stop_reason(result.reached, request), result.iterations, result.evaluations,
-                       None, settings, task_errors=result.task_errors, values=result.values)
+                       None, self._report(start, iterations, result.restarts, result.regularized),
+                       task_errors=result.task_errors, values=result.values)
+
+    def _report(self, start: str, iterations: int, restarts: int, regularized: str | None) -> dict[str, Any]:
+        """The settings a result reports: where it started, the budget, how the solve went, the options."""
+        return {"start": start, "max_iterations": iterations, "restart_count": restarts, "regularized": regularized,
+                **self.options.__dict__}

@@ -18,7 +18,9 @@ waypoint by a few Levenberg-Marquardt steps of the local engine; on by default f
 search distribution along the path (CMA-ES), which then start from the task.
 
 A :class:`TrackingTask` builds its problem once and moves its targets in place at every waypoint
-(``set_target``); a custom builder's objective is rebuilt per waypoint.
+(``set_target``); a custom builder's objective is rebuilt per waypoint. With a :class:`TrackingTask` and a solver
+that starts from the previous solution (``hybrid``, ``multistart_lm``), the waypoints its local engine answers run
+in compiled stretches (:mod:`~framework.tracking.chain`), with the answers one solve per waypoint gives.
 """
 
 from .loop import continued, track

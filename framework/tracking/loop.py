@@ -13,9 +13,10 @@ from ..costs import Objective
 from ..errors import TaskError
 from ..problem import Problem
 from ..robot import Robot
-from ..solve import IKResult, solve
+from ..solve import IKResult, make_request, solve
 from ..solvers import IKSolver, ik_solver
 from ..trajectory import Trajectory
+from .chain import Chain
 from .metrics import TrackingResult, waypoint_errors
 from .progress import Progress
 from .task import (
@@ -119,29 +120,45 @@ def track(
     stop_reason = "completed"
     problem: Problem | None = None
     start, cpu_start = time.perf_counter(), time.process_time()
+    # a TrackingTask solved from the previous solution alone: stretches of waypoints run compiled (chain.py)
+    chained = spec is not None and warm_start and not predict and method.uses_jacobians
+    chain: Chain | None = None
     with Progress(progress, trajectory.K, f"tracking {trajectory.name} ({solver})") as bar:
         try:
-            for k in range(trajectory.K):
-                rotation = trajectory.rotation(k)
-                position = trajectory.positions[k]
-                moved = problem is not None and spec is not None and spec.update(
-                    problem.objective, position, rotation, previous)
-                if not moved:
-                    problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
-                                      priorities=priorities)
-                seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start, warm_spread,
-                                                    predict and warm_start, population, rng, carry, state)
-                result = solve(problem, solver, seed=rng, max_iterations=iterations_per_point,
-                               population=population, tolerance=tolerance, stop_at_tolerance=stop_at_tolerance,
-                               initial=seeds, options=solver_options or None)
-                if result.stop_reason == "interrupted":
-                    stop_reason = "interrupted"
-                    break
-                rows.append((result, problem.program.term_kinds))
-                previous, state = result.configuration, result.state
-                bar.advance(result.task_error)
-                if callback is not None and callback(k, result):
-                    stop_reason = "callback"
+            k, missed = 0, True
+            while k < trajectory.K:
+                if chain is not None and not missed:
+                    results, missed = chain.run(k, previous, rng)
+                else:  # the first waypoint, one the engine missed, or no chain: the solver itself
+                    rotation = trajectory.rotation(k)
+                    position = trajectory.positions[k]
+                    moved = problem is not None and spec is not None and spec.update(
+                        problem.objective, position, rotation, previous)
+                    if not moved:
+                        problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
+                                          priorities=priorities)
+                        chain = Chain.of(problem, spec, trajectory, method, make_request(
+                            problem, tolerance=tolerance, max_iterations=iterations_per_point, population=population,
+                            stop_at_tolerance=stop_at_tolerance, initial=previous)) if chained else None
+                    seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start,
+                                                        warm_spread, predict and warm_start, population, rng, carry,
+                                                        state)
+                    result = solve(problem, solver, seed=rng, max_iterations=iterations_per_point,
+                                   population=population, tolerance=tolerance, stop_at_tolerance=stop_at_tolerance,
+                                   initial=seeds, options=solver_options or None)
+                    if result.stop_reason == "interrupted":
+                        stop_reason = "interrupted"
+                        break
+                    results, missed = [result], False
+                for result in results:
+                    rows.append((result, problem.program.term_kinds))
+                    previous, state = result.configuration, result.state
+                    bar.advance(result.task_error)
+                    k += 1
+                    if callback is not None and callback(k - 1, result):
+                        stop_reason = "callback"
+                        break
+                if stop_reason != "completed":
                     break
         except KeyboardInterrupt:
             stop_reason = "interrupted"

@@ -122,14 +122,22 @@ class TrackingTask:
         terms = {t.name: t for _, t in objective}
         if ("orientation" in terms) != (rotation is not None and self.orientation_weight > 0):
             return False
-        terms["position"].set_target(position)
-        if "orientation" in terms:
-            terms["orientation"].set_target(rotation)
-        if self.follower is not None and self.coordination == "target":
-            terms["follower"].set_target(position + self.offset)
+        for name, target in self.targets(position, rotation).items():
+            terms[name].set_target(target)
         for group in self.motion:
             terms[f"motion[{group}]"].set_target(previous)
         return True
+
+    def targets(self, positions: np.ndarray, rotations: np.ndarray | None) -> dict[str, np.ndarray]:
+        """The targets the path sets, by term name, of one waypoint (``(3,)``, ``(3, 3)`` or ``None``) or of
+        many (``(K, 3)``, ``(K, 3, 3)``): position, [orientation], [follower]; the motion terms' reference is the
+        previous solution, not part of the path."""
+        targets = {"position": positions}
+        if rotations is not None and self.orientation_weight > 0:
+            targets["orientation"] = rotations
+        if self.follower is not None and self.coordination == "target":
+            targets["follower"] = positions + self.offset
+        return targets
 
     def frames(self, robot: Robot) -> tuple[str, ...]:
         """The frames that track: the main frame and, if any, the follower."""

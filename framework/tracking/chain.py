@@ -1,0 +1,85 @@
+"""Stretches of a path solved in one compiled call, while the solver's engine phase answers every waypoint.
+
+Along a path, a Jacobian solver warm-started from the previous solution solves waypoint ``k`` as: the targets
+moved to the waypoint, the motion terms' reference moved to the previous solution, the local engine from that
+solution (its :meth:`~framework.solvers.IKSolver.batch_plan`); most waypoints end there. A :class:`Chain` runs
+that for a stretch of waypoints in one compiled call (:func:`~framework.engine.batch.follow_items`), without a
+Python solve, its checks and its result per waypoint (about half a waypoint's time on paper 000's paths). It stops
+at the first waypoint the engine misses; the tracking loop solves that one with the solver itself (its global
+phase), then goes on chained.
+
+Each waypoint's answer is the one :func:`~framework.solve.solve` gives it (the same compiled descent from the same
+start and parameters), and the seed generator advances as one solve per waypoint advances it, so the waypoints a
+solve falls back to draw what they would have drawn: a path's answers do not depend on where the stretches break.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..engine.batch import CHUNK, BatchState, follow_items
+from ..engine.local import regularized_status
+from ..problem import Problem
+from ..solve import IKResult
+from ..solvers import IKSolver, Request
+from ..trajectory import Trajectory
+from .task import TrackingTask
+
+
+class Chain:
+    """The waypoints of one path and problem, ready to be solved in compiled stretches (see module).
+
+    Made by :meth:`of`, which says whether the solver's plan allows it; :meth:`run` solves a stretch.
+    """
+
+    def __init__(self, problem: Problem, P: np.ndarray, plan, request: Request, solver: str):
+        self.problem, self.P, self.plan, self.request, self.solver = problem, P, plan, request, solver
+        self.state = BatchState.start(problem.program, np.zeros((P.shape[0], problem.robot.n)))
+        self.streams = np.zeros(P.shape[0], dtype=np.uint64)
+
+    @classmethod
+    def of(cls, problem: Problem, spec: TrackingTask, trajectory: Trajectory, method: IKSolver,
+           request: Request) -> Chain | None:
+        """The chain of ``problem`` (built by ``spec`` for ``trajectory``) solved by ``method`` with ``request``'s
+        tolerances and budgets, or ``None`` when a waypoint's solve is not the engine alone (no plan: a global
+        phase first, a weighted sum that decides) or reads what the compiled loop does not (terms without a
+        compiled form, collision terms checked exactly)."""
+        program = problem.program
+        plan = method.batch_plan(problem, request)
+        if plan is None or not program.task_rows or program.layout.generic or problem.checks_collisions:
+            return None
+        program.refresh()
+        P = np.tile(program.prog[2], (trajectory.K, 1))
+        terms = dict(zip(problem.names, program.terms))
+        for name, targets in spec.targets(trajectory.positions, trajectory.rotations).items():
+            start, stop = program.layout.param_spans[problem.names.index(name)]
+            P[:, start:stop] = terms[name].target_parameters(problem.robot, targets)
+        return cls(problem, P, plan, request, method.name)
+
+    def run(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> tuple[list[IKResult], bool]:
+        """Solve waypoints ``k, k + 1, ...`` (at most :data:`~framework.engine.batch.CHUNK`) from ``previous``
+        ``(n,)``; returns their results and whether the stretch stopped at a waypoint the engine missed (the
+        next one, left to the solver). ``rng`` advances by one seed per waypoint solved, as ``solve`` draws it."""
+        items = np.arange(k, min(k + CHUNK, self.P.shape[0]), dtype=np.int64)
+        state = self.state
+        state.X[k] = previous
+        saved = rng.bit_generator.state
+        self.streams[items] = rng.integers(0, 2**63, size=items.size).astype(np.uint64)
+        done = follow_items(self.problem.program, self.P, state, items, self.plan.first, self.streams)
+        rng.bit_generator.state = saved
+        rng.integers(0, 2**63, size=done)  # as many seeds as solves would have drawn
+        return [self._result(int(i)) for i in items[:done]], done < items.size
+
+    def _result(self, i: int) -> IKResult:
+        """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solve.solve` makes it."""
+        state, program, request = self.state, self.problem.program, self.request
+        values, errors = state.V[i].tolist(), state.E[i].tolist()
+        cost = 0.0
+        for w, v in zip(program.weight_list, values):
+            cost += w * v
+        success = program.within(errors, request.tolerance, request.angle_tolerance)
+        settings = {**self.plan.report, "restart_count": int(state.counts[i, 2]),
+                    "regularized": regularized_status(int(state.regularized[i]))}
+        return IKResult._of_solve(state.X[i].copy(), cost, success, "tolerance", int(state.counts[i, 0]),
+                                  int(state.counts[i, 1]), 1e-9 * state.spent_ns[i], self.solver, settings, {}, None,
+                                  (program, values, errors, None))
