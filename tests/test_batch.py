@@ -134,3 +134,25 @@ def test_misses_are_the_engines_best_miss_as_in_solve():
                        max_iterations=120)
         np.testing.assert_array_equal(batch.configurations[i], one.configuration)
         assert batch.iterations[i] == one.iterations
+
+
+def test_batched_target_parameters_are_those_of_one_target_at_a_time(puma):
+    # the vectorized readers (Position, Orientation, Pose) against the term moved to each target in turn
+    rng = np.random.default_rng(4)
+    R = np.array([pin.exp3(rng.normal(size=3)) for _ in range(5)])
+    p = rng.normal(size=(5, 3))
+    T = np.tile(np.eye(4), (5, 1, 1))
+    T[:, :3, :3], T[:, :3, 3] = R, p
+    for term, targets in ((fw.Position("ee", p[0]), p), (fw.Orientation("ee", R[0]), R), (fw.Pose("ee", T[0]), T)):
+        batch = term.target_parameters(puma, targets)
+        for k in range(5):
+            term.set_target(targets[k])
+            np.testing.assert_array_equal(batch[k], term.parameters(puma))
+    skewed = R.copy()
+    skewed[3] *= 1.01  # RᵀR ≠ I
+    with pytest.raises(TaskError, match="item 3 is not a rotation"):
+        fw.Orientation("ee", R[0]).target_parameters(puma, skewed)
+    mirrored = R.copy()
+    mirrored[1] = -mirrored[1]  # det < 0
+    with pytest.raises(TaskError, match="item 1 is not a rotation"):
+        fw.Orientation("ee", R[0]).target_parameters(puma, mirrored)
