@@ -96,9 +96,11 @@ class Hybrid(IKSolver):
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
-        comes first or the weighted sum decides (``priorities`` off with regularizers)."""
+        comes first, the weighted sum decides (``priorities`` off with regularizers) or the problem is first
+        solved without its collision terms (:meth:`clears_first`)."""
         o = self.options
-        if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers):
+        if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers) \
+                or self.clears_first(problem):
             return None
         x0, start = start_configuration(problem, request, o.warm_start)
         budget = default_iterations(request)
@@ -125,6 +127,12 @@ class Hybrid(IKSolver):
                                self._report(start, budget, opening.restarts, opening.regularized, request),
                                task_errors=opening.task_errors, values=opening.values)
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
+
+    def clears_first(self, problem) -> bool:
+        """Whether each descent first solves the problem without its collision terms (see module, 2.: collision
+        terms with a loose sphere cover, priorities, no global phase first)."""
+        return problem.checks_collisions and not self.options.global_iterations and problem.priorities \
+            and problem.program.loose_hulls and problem.without_collision_terms is not None
 
     def _report(self, start: str, budget: int, restarts: int, regularized: str | None, request: Request, *,
                 escalated: bool = False, weighted: bool = False, hull_runs: int = 0, on_hulls: bool = False,
@@ -205,8 +213,7 @@ class Hybrid(IKSolver):
         escalated, check, best = False, None, None
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
-        loose = problem.checks_collisions and not o.global_iterations and problem.priorities \
-            and problem.program.loose_hulls and problem.without_collision_terms is not None
+        loose = self.clears_first(problem)
         met = True  # whether the warm start's basin met the task without the collision terms
         if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
             best, check, met = clear_first(x0, first)
