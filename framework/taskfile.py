@@ -382,6 +382,23 @@ class _TermsAtWaypoint:
             point["R"] = rotation
         return _objective(self.robot, self.terms, point, previous, self.world)
 
+    def path_parameters(self, problem: Problem, trajectory: Trajectory) -> np.ndarray | None:
+        """``(K, p)``: the parameters of ``problem`` (built by this builder) at every waypoint of ``trajectory``
+        (for :func:`framework.tracking.track`'s compiled stretches), or ``None`` when they are not all that moves:
+        the waypoints' objectives differ in their terms or weights, or a motion term measures from a ``previous``
+        of its own (only the motion to the previous solution follows the path: the program's reference slots)."""
+        if any(spec.get("type") == "motion" and "previous" in spec for spec in self.terms):
+            return None
+        program = problem.program
+        P = np.empty((trajectory.K, program.prog[2].size))
+        for k in range(trajectory.K):
+            at = Problem(self.robot, self(k, trajectory.positions[k], trajectory.rotation(k), self.robot.middle),
+                         bounds=problem.bounds, priorities=problem.priorities).program
+            if at.layout is not program.layout or at.weight_list != program.weight_list:
+                return None
+            P[k] = at.prog[2]
+        return P
+
 
 def _check_uses_waypoint(terms: list) -> None:
     """A tracking task whose terms never read ``t`` or ``R`` would solve the same IK at every waypoint."""

@@ -192,3 +192,32 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint(tmp_path):
     solved = len(rows) - 1  # waypoints in the CSV (written first, then posed in the recording)
     assert solved - 1 <= len(X) <= solved  # a kill between the two writes leaves the last one in the CSV only
     np.testing.assert_array_equal(X, X_full[: len(X)])
+
+
+@pytest.mark.parametrize("motion", ["", 'previous = [0, 0.3, -0.6, 0.4, 0]'])
+def test_task_file_paths_run_chained_with_the_answers_of_one_solve_per_waypoint(tmp_path, monkeypatch, motion):
+    # the task file's terms know their parameters along the path: its waypoints run in compiled stretches,
+    # unless a motion term measures from a `previous` of its own (then every waypoint is one solve)
+    from framework.problem import Problem
+    from framework.solve import solve
+    from framework.tracking import FIRST_GLOBAL_ITERATIONS, chain, track
+
+    chained = []
+    follow = chain.follow_items
+    monkeypatch.setattr(chain, "follow_items", lambda *a: chained.append(follow(*a)) or chained[-1])
+    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    file = tmp_path / "wave.toml"
+    file.write_text(TRACK.replace('group = "all"', 'group = "all"\n' + motion, 1))
+    case = load_task(file).cases[0]
+    robot = case.problem.robot
+    result = track(robot, case.trajectory, case.builder, initial=case.initial, tolerance=1e-6, progress=False)
+    rng, previous, reference = np.random.default_rng(0), case.initial.copy(), []
+    for k in range(case.trajectory.K):  # the loop's definition: the builder's problem at each waypoint
+        problem = Problem(robot, case.builder(k, case.trajectory.positions[k], case.trajectory.rotation(k), previous))
+        reference.append(solve(problem, "hybrid", seed=rng, max_iterations=300, tolerance=1e-6, initial=previous[None],
+                               options={"global_iterations": FIRST_GLOBAL_ITERATIONS} if k == 0 else None))
+        previous = reference[-1].configuration
+    assert (sum(chained) == case.trajectory.K - 1) if not motion else not chained
+    np.testing.assert_array_equal(result.configurations, [r.configuration for r in reference])
+    np.testing.assert_array_equal(result.cost, [r.cost for r in reference])
+    assert result.all_success

@@ -18,8 +18,9 @@ waypoint by a few Levenberg-Marquardt steps of the local engine; on by default f
 search distribution along the path (CMA-ES), which then start from the task.
 
 A :class:`TrackingTask` builds its problem once and moves its targets in place at every waypoint
-(``set_target``); a custom builder's objective is rebuilt per waypoint. With a :class:`TrackingTask` and a solver
-that starts from the previous solution (``hybrid``, ``multistart_lm``), the waypoints its local engine answers run
+(``set_target``); a custom builder's objective is rebuilt per waypoint. A task that gives its parameters along the
+path (``path_parameters(problem, trajectory)``: :class:`TrackingTask`, a task file's terms) tracked by a solver
+that starts from the previous solution (``hybrid``, ``multistart_lm``) runs the waypoints its local engine answers
 in compiled stretches (:mod:`~framework.tracking.chain`), with the answers one solve per waypoint gives.
 """
 

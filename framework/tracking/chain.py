@@ -22,8 +22,6 @@ from ..engine.local import regularized_status
 from ..problem import Problem
 from ..solve import IKResult
 from ..solvers import IKSolver, Request
-from ..trajectory import Trajectory
-from .task import TrackingTask
 
 
 class Chain:
@@ -38,23 +36,17 @@ class Chain:
         self.streams = np.zeros(P.shape[0], dtype=np.uint64)
 
     @classmethod
-    def of(cls, problem: Problem, spec: TrackingTask, trajectory: Trajectory, method: IKSolver,
-           request: Request) -> Chain | None:
-        """The chain of ``problem`` (built by ``spec`` for ``trajectory``) solved by ``method`` with ``request``'s
-        tolerances and budgets, or ``None`` when a waypoint's solve is not the engine alone (no plan: a global
-        phase first, a weighted sum that decides) or reads what the compiled loop does not (terms without a
-        compiled form, collision terms checked exactly)."""
+    def of(cls, problem: Problem, P: np.ndarray, method: IKSolver, request: Request) -> Chain | None:
+        """The chain of ``problem`` at the waypoints' parameters ``P`` ``(K, p)`` (a task's ``path_parameters``:
+        each waypoint's targets; the regularizers' reference, the previous solution, is written as the path is
+        solved), solved by ``method`` with ``request``'s tolerances and budgets, or ``None`` when a waypoint's
+        solve is not the engine alone (no plan: a global phase first, a weighted sum that decides) or reads what
+        the compiled loop does not (terms without a compiled form, collision terms checked exactly)."""
         program = problem.program
         plan = method.batch_plan(problem, request)
         if plan is None or not program.task_rows or program.layout.generic or problem.checks_collisions:
             return None
-        program.refresh()
-        P = np.tile(program.prog[2], (trajectory.K, 1))
-        terms = dict(zip(problem.names, program.terms))
-        for name, targets in spec.targets(trajectory.positions, trajectory.rotations).items():
-            start, stop = program.layout.param_spans[problem.names.index(name)]
-            P[:, start:stop] = terms[name].target_parameters(problem.robot, targets)
-        return cls(problem, P, plan, request, method.name)
+        return cls(problem, np.ascontiguousarray(P, dtype=float), plan, request, method.name)
 
     def run(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> tuple[list[IKResult], bool]:
         """Solve waypoints ``k, k + 1, ...`` (at most :data:`~framework.engine.batch.CHUNK`) from ``previous``

@@ -120,8 +120,10 @@ def track(
     stop_reason = "completed"
     problem: Problem | None = None
     start, cpu_start = time.perf_counter(), time.process_time()
-    # a TrackingTask solved from the previous solution alone: stretches of waypoints run compiled (chain.py)
-    chained = spec is not None and warm_start and not predict and method.uses_jacobians
+    # a task that knows its parameters along the path (``path_parameters``), solved from the previous solution
+    # alone: stretches of waypoints run compiled (chain.py)
+    planner = getattr(spec if task is None else task, "path_parameters", None)
+    chained = planner is not None and warm_start and not predict and method.uses_jacobians
     chain: Chain | None = None
     with Progress(progress, trajectory.K, f"tracking {trajectory.name} ({solver})") as bar:
         try:
@@ -137,9 +139,11 @@ def track(
                     if not moved:
                         problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
                                           priorities=priorities)
-                        chain = Chain.of(problem, spec, trajectory, method, make_request(
+                    if chained:  # once, from the first waypoint's problem (every waypoint's has its layout)
+                        chained, P = False, planner(problem, trajectory)
+                        chain = None if P is None else Chain.of(problem, P, method, make_request(
                             problem, tolerance=tolerance, max_iterations=iterations_per_point, population=population,
-                            stop_at_tolerance=stop_at_tolerance, initial=previous)) if chained else None
+                            stop_at_tolerance=stop_at_tolerance, initial=previous))
                     seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start,
                                                         warm_spread, predict and warm_start, population, rng, carry,
                                                         state)

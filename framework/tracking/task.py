@@ -12,8 +12,10 @@ import numpy as np
 from ..costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
 from ..costs.base import check_weight
 from ..errors import TaskError
+from ..problem import Problem
 from ..robot import Robot
 from ..solve import IKResult
+from ..trajectory import Trajectory
 
 #: ``builder(k, position (3,), rotation (3, 3) or None, previous (n,)) -> Objective`` for waypoint ``k``.
 TaskBuilder = Callable[[int, np.ndarray, "np.ndarray | None", np.ndarray], Objective]
@@ -138,6 +140,20 @@ class TrackingTask:
         if self.follower is not None and self.coordination == "target":
             targets["follower"] = positions + self.offset
         return targets
+
+    def path_parameters(self, problem: Problem, trajectory: Trajectory) -> np.ndarray:
+        """``(K, p)``: the parameters of ``problem`` (built by :meth:`objective`) at every waypoint of
+        ``trajectory``, the targets moved as :meth:`update` moves them; the motion terms' reference is the previous
+        solution, which the program's :attr:`~framework.costs.program._Layout.reference_slots` hold (it is written
+        there as the path is solved)."""
+        program = problem.program
+        program.refresh()
+        P = np.tile(program.prog[2], (trajectory.K, 1))
+        terms = dict(zip(problem.names, program.terms))
+        for name, targets in self.targets(trajectory.positions, trajectory.rotations).items():
+            start, stop = program.layout.param_spans[problem.names.index(name)]
+            P[:, start:stop] = terms[name].target_parameters(problem.robot, targets)
+        return P
 
     def frames(self, robot: Robot) -> tuple[str, ...]:
         """The frames that track: the main frame and, if any, the follower."""
