@@ -50,17 +50,22 @@ class Chain:
 
     def run(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> tuple[list[IKResult], bool]:
         """Solve waypoints ``k, k + 1, ...`` (at most :data:`~framework.engine.batch.CHUNK`) from ``previous``
-        ``(n,)``; returns their results and whether the stretch stopped at a waypoint the engine missed (the
-        next one, left to the solver). ``rng`` advances by one seed per waypoint solved, as ``solve`` draws it."""
+        ``(n,)``, each with the seed its solve would draw from ``rng`` (left as it was: :meth:`spend` advances it
+        by the waypoints kept); returns their results and whether the stretch stopped at a waypoint the engine
+        missed (the next one, left to the solver)."""
         items = np.arange(k, min(k + CHUNK, self.P.shape[0]), dtype=np.int64)
         state = self.state
         state.X[k] = previous
         saved = rng.bit_generator.state
         self.streams[items] = rng.integers(0, 2**63, size=items.size).astype(np.uint64)
-        done = follow_items(self.problem.program, self.P, state, items, self.plan.first, self.streams)
         rng.bit_generator.state = saved
-        rng.integers(0, 2**63, size=done)  # as many seeds as solves would have drawn
+        done = follow_items(self.problem.program, self.P, state, items, self.plan.first, self.streams)
         return [self._result(int(i)) for i in items[:done]], done < items.size
+
+    @staticmethod
+    def spend(rng: np.random.Generator, count: int) -> None:
+        """Advance ``rng`` as ``count`` solves advance it (one seed each): the waypoints of a stretch kept."""
+        rng.integers(0, 2**63, size=count)
 
     def _result(self, i: int) -> IKResult:
         """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solve.solve` makes it."""

@@ -129,7 +129,8 @@ def track(
         try:
             k, missed = 0, True
             while k < trajectory.K:
-                if chain is not None and not missed:
+                chained_results = chain is not None and not missed
+                if chained_results:
                     results, missed = chain.run(k, previous, rng)
                 else:  # the first waypoint, one the engine missed, or no chain: the solver itself
                     rotation = trajectory.rotation(k)
@@ -154,14 +155,19 @@ def track(
                         stop_reason = "interrupted"
                         break
                     results, missed = [result], False
-                for result in results:
-                    rows.append((result, problem.program.term_kinds))
-                    previous, state = result.configuration, result.state
-                    bar.advance(result.task_error)
-                    k += 1
-                    if callback is not None and callback(k - 1, result):
-                        stop_reason = "callback"
-                        break
+                kept = 0
+                try:
+                    for result in results:
+                        rows.append((result, problem.program.term_kinds))
+                        previous, state = result.configuration, result.state
+                        bar.advance(result.task_error)
+                        k, kept = k + 1, kept + 1
+                        if callback is not None and callback(k - 1, result):
+                            stop_reason = "callback"
+                            break
+                finally:
+                    if chained_results:  # the seeds of the waypoints kept (those past a stop are not the path's)
+                        Chain.spend(rng, kept)
                 if stop_reason != "completed":
                     break
         except KeyboardInterrupt:
