@@ -178,7 +178,7 @@ def solve(
                            initial=initial, stop_at_tolerance=stop_at_tolerance, callback=callback, progress=progress)
     method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
     outcome = method.solve(problem, request)
-    return _result(problem, outcome, method.name, request, start)
+    return result_of(problem, outcome, method.name, request, start)
 
 
 def make_request(
@@ -249,7 +249,10 @@ def _lazy_generator(seed: int | np.random.Generator) -> Callable[[], np.random.G
     return generator
 
 
-def _result(problem: Problem, outcome, solver: str, request: Request, start: float) -> IKResult:
+def result_of(problem: Problem, outcome, solver: str, request: Request, start: float) -> IKResult:
+    """The :class:`IKResult` of a solver's :class:`~framework.solvers.Outcome` for ``request`` (success: every task
+    block within its tolerance and, with collision terms, no contact by the exact check); ``start``: the
+    ``time.perf_counter()`` its wall time counts from."""
     x = np.array(outcome.x, dtype=float)
     program = problem.program
     values = program.values(x[None])[0] if outcome.values is None else outcome.values

@@ -238,7 +238,7 @@ def test_bad_input(arm, mobile_dual):
         track(arm, path, solver="gradient_descent", progress=False)
 
 
-def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0):
+def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0, tolerance=1e-4):
     """The tracking loop's definition, written out: one ``solve`` per waypoint from the previous solution, the
     targets and motion references moved in place, one generator through every solve."""
     from framework.solve import solve
@@ -250,7 +250,7 @@ def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0):
     for k in range(path.K):
         spec.update(problem.objective, path.positions[k], path.rotation(k), previous)
         first = k == 0 and solver == "hybrid"
-        results.append(solve(problem, solver, seed=rng, max_iterations=300, tolerance=1e-4,
+        results.append(solve(problem, solver, seed=rng, max_iterations=300, tolerance=tolerance,
                              initial=previous[None], options={"global_iterations": FIRST_GLOBAL_ITERATIONS}
                              if first else None))
         previous = results[-1].configuration
@@ -297,3 +297,31 @@ def test_chained_orientation_path_and_a_callback_stop_inside_a_stretch():
     np.testing.assert_array_equal(result.configurations, [r.configuration for r in reference])
     assert ours.bit_generator.state == theirs.bit_generator.state  # drawn as 8 solves draw, no more
     assert result.position_error.max() < 1e-9 and result.orientation_error.max() < 1e-9
+
+
+@pytest.mark.parametrize("table", [False, True])
+def test_tracking_with_collision_terms_gives_what_one_solve_per_waypoint_gives(mobile_dual, monkeypatch, table):
+    # collision terms as TrackingTask's extra terms. SelfCollision (an exact sphere cover): chained, each waypoint
+    # checked by coal as solve checks it. With the table of tasks/paper000_circular_table.toml (Obstacles: a loose
+    # cover, the hybrid solves each waypoint without the terms first): one solve per waypoint. Either way the
+    # answers and successes of one solve per waypoint, every point clear by coal.
+    from framework.tracking import chain
+
+    chained = []
+    follow = chain.follow_items
+    monkeypatch.setattr(chain, "follow_items", lambda *a: chained.append(follow(*a)) or chained[-1])
+    scene = load_task(resolve_task("paper000_circular_table")).scene
+    shape = fw.RobotShape(mobile_dual)
+    extra = fw.SelfCollision(shape) + fw.Obstacles(shape, scene, margin=0.01) if table else fw.SelfCollision(shape)
+    path = tr.paper000("circular", 200)[:12]
+    spec = TrackingTask(**PAPER000, extra=extra)
+    result = track(mobile_dual, path, spec, solver="hybrid", initial=Q_PREV, tolerance=1e-6, progress=False)
+    reference = _one_solve_per_waypoint(mobile_dual, path, spec, "hybrid", Q_PREV, tolerance=1e-6)
+    assert (not chained) if table else sum(chained) == 11
+    np.testing.assert_array_equal(result.configurations, [r.configuration for r in reference])
+    np.testing.assert_array_equal(result.success, [r.success for r in reference])
+    assert result.all_success
+    for q in result.configurations:  # clear of the table and of itself by coal on the exact geometry
+        assert not shape.check(q, scene=scene if table else None, distances=False).colliding
+    with pytest.raises(fw.TaskError, match="names other than"):
+        TrackingTask(extra=fw.Position("ee", (0.3, 0.0, 0.3), name="position"))

@@ -15,13 +15,15 @@ solve falls back to draw what they would have drawn: a path's answers do not dep
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from ..engine.batch import CHUNK, BatchState, follow_items
 from ..engine.local import regularized_status
 from ..problem import Problem
-from ..solve import IKResult
-from ..solvers import IKSolver, Request
+from ..solve import IKResult, result_of
+from ..solvers import IKSolver, Outcome, Request
 
 
 class Chain:
@@ -40,11 +42,11 @@ class Chain:
         """The chain of ``problem`` at the waypoints' parameters ``P`` ``(K, p)`` (a task's ``path_parameters``:
         each waypoint's targets; the regularizers' reference, the previous solution, is written as the path is
         solved), solved by ``method`` with ``request``'s tolerances and budgets, or ``None`` when a waypoint's
-        solve is not the engine alone (no plan: a global phase first, a weighted sum that decides) or reads what
-        the compiled loop does not (terms without a compiled form, collision terms checked exactly)."""
+        solve is not the engine alone (no plan: a global phase first, a weighted sum that decides, collision terms
+        solved first without them) or reads what the compiled loop does not (terms without a compiled form)."""
         program = problem.program
         plan = method.batch_plan(problem, request)
-        if plan is None or not program.task_rows or program.layout.generic or problem.checks_collisions:
+        if plan is None or not program.task_rows or program.layout.generic:
             return None
         return cls(problem, np.ascontiguousarray(P, dtype=float), plan, request, method.name)
 
@@ -68,15 +70,12 @@ class Chain:
         rng.integers(0, 2**63, size=count)
 
     def _result(self, i: int) -> IKResult:
-        """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solve.solve` makes it."""
-        state, program, request = self.state, self.problem.program, self.request
-        values, errors = state.V[i].tolist(), state.E[i].tolist()
-        cost = 0.0
-        for w, v in zip(program.weight_list, values):
-            cost += w * v
-        success = program.within(errors, request.tolerance, request.angle_tolerance)
+        """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solve.solve` makes it (the
+        exact collision check included, when the problem has collision terms)."""
+        state = self.state
         settings = {**self.plan.report, "restart_count": int(state.counts[i, 2]),
                     "regularized": regularized_status(int(state.regularized[i]))}
-        return IKResult._of_solve(state.X[i].copy(), cost, success, "tolerance", int(state.counts[i, 0]),
-                                  int(state.counts[i, 1]), 1e-9 * state.spent_ns[i], self.solver, settings, {}, None,
-                                  (program, values, errors, None))
+        outcome = Outcome(state.X[i].copy(), "tolerance", int(state.counts[i, 0]), int(state.counts[i, 1]), None,
+                          settings, task_errors=state.E[i].copy(), values=state.V[i].copy())
+        start = time.perf_counter() - 1e-9 * state.spent_ns[i]  # the wall time counts the compiled solve
+        return result_of(self.problem, outcome, self.solver, self.request, start)

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
-from ..costs.base import check_weight
+from ..costs.base import Term, check_weight
 from ..errors import TaskError
 from ..problem import Problem
 from ..robot import Robot
@@ -59,6 +59,9 @@ class TrackingTask:
         coordination: ``"target"``: ``‖p_follower − (t_k + t_r)‖`` (paper 000 eq. 8); ``"relative"``:
             ``‖p_follower − (p_frame + t_r)‖`` (paper 001's relative-position error).
         joint_limits: weight δ of a joint-limit penalty (paper 001), or ``None`` for none.
+        extra: terms added at every waypoint as they are, with their weights (a :class:`~framework.costs.Term`
+            or an :class:`~framework.costs.Objective`): collision terms (``SelfCollision``, ``Obstacles``), a
+            posture, ...; their names must differ from the path's own terms'.
     """
 
     frame: str | None = None
@@ -71,6 +74,7 @@ class TrackingTask:
     follower_weight: float | None = None
     coordination: str = "target"
     joint_limits: float | None = None
+    extra: Objective | Term | None = None
 
     def __post_init__(self) -> None:
         check_weight(self.position_weight)
@@ -88,6 +92,13 @@ class TrackingTask:
             if offset.shape != (3,) or not np.all(np.isfinite(offset)):
                 raise TaskError(f"the relative offset t_r must be 3 finite numbers [m]; got {self.offset!r}")
             object.__setattr__(self, "offset", offset)
+        if self.extra is not None:
+            extra = Objective.of(self.extra)
+            own = {"position", "orientation", "follower", "joint_limits"} | {f"motion[{g}]" for g in motion}
+            clash = sorted(own & {term.name for _, term in extra})
+            if clash:
+                raise TaskError(f"extra terms need names other than the path's own terms; got {clash}")
+            object.__setattr__(self, "extra", extra)
 
     def frame_of(self, robot: Robot) -> str:
         return self.frame or robot.end_effectors[0]
@@ -113,6 +124,8 @@ class TrackingTask:
             )
         if self.joint_limits is not None:
             objective = objective + JointLimitPenalty(self.joint_limits)
+        if self.extra is not None:
+            objective = objective + self.extra
         return objective
 
     def update(self, objective: Objective, position: np.ndarray, rotation: np.ndarray | None,
