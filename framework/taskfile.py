@@ -382,13 +382,11 @@ class _TermsAtWaypoint:
             point["R"] = rotation
         return _objective(self.robot, self.terms, point, previous, self.world)
 
-    def path_parameters(self, problem: Problem, trajectory: Trajectory) -> np.ndarray | None:
-        """``(K, p)``: the parameters of ``problem`` (built by this builder) at every waypoint of ``trajectory``
-        (for :func:`framework.tracking.track`'s compiled stretches), or ``None`` when they are not all that moves:
-        the waypoints' objectives differ in their terms or weights, or a motion term measures from a ``previous``
-        of its own (only the motion to the previous solution follows the path: the program's reference slots)."""
-        if any(spec.get("type") == "motion" and "previous" in spec for spec in self.terms):
-            return None
+    def path_parameters(self, problem: Problem, trajectory: Trajectory) -> tuple[np.ndarray, tuple] | None:
+        """``(P, follows)``: the parameters ``P (K, p)`` of ``problem`` (built by this builder) at every waypoint of
+        ``trajectory``, and those that follow the previous solution (the reference of the motion terms without a
+        ``previous`` of their own), for :func:`framework.tracking.track`'s compiled stretches; ``None`` when the
+        waypoints' objectives differ in more than their parameters (their terms or weights)."""
         program = problem.program
         P = np.empty((trajectory.K, program.prog[2].size))
         for k in range(trajectory.K):
@@ -397,7 +395,8 @@ class _TermsAtWaypoint:
             if at.layout is not program.layout or at.weight_list != program.weight_list:
                 return None
             P[k] = at.prog[2]
-        return P
+        follows = [i for i, spec in enumerate(self.terms) if spec.get("type") == "motion" and "previous" not in spec]
+        return P, program.layout.references_of(follows)
 
 
 def _check_uses_waypoint(terms: list) -> None:

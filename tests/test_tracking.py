@@ -325,3 +325,34 @@ def test_tracking_with_collision_terms_gives_what_one_solve_per_waypoint_gives(m
         assert not shape.check(q, scene=scene if table else None, distances=False).colliding
     with pytest.raises(fw.TaskError, match="names other than"):
         TrackingTask(extra=fw.Position("ee", (0.3, 0.0, 0.3), name="position"))
+
+
+def test_a_callback_that_moves_a_term_is_seen_from_the_next_waypoint(arm):
+    # an extra posture term (a motion term with a reference of its own, which the path does not move) moved by
+    # the callback after waypoint 4, inside a compiled stretch: the waypoints after it are solved with the moved
+    # term, as one solve per waypoint solves them
+    posture = Motion("all", arm.middle, name="posture")
+    spec = TrackingTask(motion=0.01, extra=0.05 * posture)
+    path = tr.circle((0.3, 0.0, 0.3), 0.03, 10)
+    elsewhere = arm.middle + 0.3
+
+    def move(k, result):
+        if k == 4:
+            posture.set_target(elsewhere)
+
+    result = track(arm, path, spec, solver="hybrid", progress=False, callback=move)
+    posture.set_target(arm.middle)
+    reference, rng, previous = [], np.random.default_rng(0), arm.middle.copy()
+    problem = Problem(arm, spec.objective(arm, 0, path.positions[0], None, previous))
+    from framework.solve import solve
+    from framework.tracking import FIRST_GLOBAL_ITERATIONS
+    for k in range(path.K):
+        spec.update(problem.objective, path.positions[k], None, previous)
+        first = {"global_iterations": FIRST_GLOBAL_ITERATIONS} if k == 0 else None
+        reference.append(solve(problem, "hybrid", seed=rng, max_iterations=300, tolerance=1e-4,
+                               initial=previous[None], options=first))
+        previous = reference[-1].configuration
+        move(k, reference[-1])
+    np.testing.assert_array_equal(result.configurations, [r.configuration for r in reference])
+    assert not np.array_equal(result.configurations[5:], track(arm, path, spec, solver="hybrid",
+                                                               progress=False).configurations[5:])

@@ -107,7 +107,7 @@ class _Layout:
         slot = {f: i for i, f in enumerate(frames)}
         rows, indices, scales, self.block_term = [], [], [], []
         self.param_spans: list[tuple[int, int]] = []  # per term: its blocks' parameters, contiguous
-        references: list[tuple[slice, slice]] = []  # (params, idx) of the regularizers' COORDINATES blocks
+        references: list[tuple[int, slice, slice]] = []  # (term, params, idx) of the regularizers' COORDINATES blocks
         pptr = iptr = 0
         for k, (level, blocks) in enumerate(zip(levels, packed)):
             first = pptr
@@ -126,7 +126,7 @@ class _Layout:
                 self.block_term.append(k)
                 scales.append(block.scale)
                 if block.kind == B.COORDINATES and level == B.LEVEL_REGULARIZER:
-                    references.append((slice(pptr, pptr + size), slice(iptr, iptr + count)))
+                    references.append((k, slice(pptr, pptr + size), slice(iptr, iptr + count)))
                 pptr += size
                 iptr += count
             self.param_spans.append((first, pptr))
@@ -167,12 +167,19 @@ class _Layout:
         self.task_limits_unchecked = tuple((k, a) for k, a in self.task_limits if not self.task_checked_exactly[k])
         self.task_rows = int(self.task_block_rows.sum())
         self.box_wrap = self.wrap & (robot.upper - robot.lower >= 2 * np.pi - 1e-9)
-        slots = [np.arange(p.start, p.stop) for p, _ in references]
+        self._references = references
         #: ``int64 (r,)`` twice: the parameters that hold the regularizers' reference configuration, and the
         #: coordinates each holds (``params[slots] = x[coordinates]`` moves the reference to ``x``)
-        self.reference_slots = (np.concatenate(slots).astype(np.int64) if slots else np.zeros(0, np.int64),
-                                np.concatenate([self.idx[i] for _, i in references]).astype(np.int64)
-                                if slots else np.zeros(0, np.int64))
+        self.reference_slots = self.references_of(range(len(terms)))
+
+    def references_of(self, terms: Iterable[int]) -> tuple[np.ndarray, np.ndarray]:
+        """:attr:`reference_slots` of the terms ``terms`` (indices in objective order) alone."""
+        chosen = set(terms)
+        picked = [(p, i) for k, p, i in self._references if k in chosen]
+        if not picked:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return (np.concatenate([np.arange(p.start, p.stop) for p, _ in picked]).astype(np.int64),
+                np.concatenate([self.idx[i] for _, i in picked]).astype(np.int64))
 
     def bflt(self, weights: tuple[float, ...]) -> np.ndarray:
         """The ``(blocks, 2)`` table of weights and scales for the terms' ``weights`` (built once per weights)."""

@@ -43,9 +43,9 @@ def descend(items, X, restarts, streams, P, chained, reference, lower, upper, bo
         items: ``int64 (k,)`` item indices.
         X: ``(B, n)`` starts; on return each solved item's configuration.
         chained: the items are consecutive waypoints of a path: item ``items[t]`` starts at the answer of
-            ``items[t - 1]`` (the first at its own row of ``X``), its regularizers' reference is written from that
-            start (``params[reference[0]] = x[reference[1]]``: :attr:`~framework.costs.program.Program.
-            reference_slots`), and the loop stops at the first item that misses the task.
+            ``items[t - 1]`` (the first at its own row of ``X``), the parameters ``reference`` holds are written from
+            that start (``params[reference[0]] = x[reference[1]]``: the motion terms' reference, the previous
+            solution), and the loop stops at the first item that misses the task.
         restarts: random restarts allowed per item; streams: ``uint64 (B,)`` each item's restart stream
             (:mod:`~framework.engine.draws`), advanced.
         P: ``(B, p)`` each item's program parameters (written into ``prog[2]`` before its solve).
@@ -125,24 +125,29 @@ def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.
         budget = np.zeros(state.X.shape[0], dtype=np.int64)
     else:
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
-    _descend(program, P, state, items, settings, streams, budget, False)
+    _descend(program, P, state, items, settings, streams, budget, None)
 
 
 def follow_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-                 streams: np.ndarray) -> int:
+                 streams: np.ndarray, follows: tuple[np.ndarray, np.ndarray]) -> int:
     """Run :func:`descend` chained over ``items``, consecutive waypoints of a path (the first starts at its row of
-    ``state.X``); returns how many were solved before the first that missed the task (all: ``len(items)``)."""
+    ``state.X``), the parameters ``follows`` (slots, coordinates: :meth:`~framework.costs.program._Layout.
+    references_of` the motion terms) written from each waypoint's start; returns how many were solved before the
+    first that missed the task (all: ``len(items)``)."""
     items = np.ascontiguousarray(items, dtype=np.int64)
-    return _descend(program, P, state, items, settings, streams, np.zeros(state.X.shape[0], dtype=np.int64), True)
+    return _descend(program, P, state, items, settings, streams, np.zeros(state.X.shape[0], dtype=np.int64), follows)
+
+
+_NONE = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
 
 def _descend(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-             streams: np.ndarray, budget: np.ndarray, chained: bool) -> int:
+             streams: np.ndarray, budget: np.ndarray, follows: tuple[np.ndarray, np.ndarray] | None) -> int:
     lower, upper, box_wrap = search_box(program)
     left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     prog = list(program.prog)
     prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    return descend(items, state.X, settings.max_restarts, streams, P, chained, program.layout.reference_slots,
+    return descend(items, state.X, settings.max_restarts, streams, P, follows is not None, follows or _NONE,
                    lower, upper, box_wrap, program.kin, tuple(prog), settings.tolerance, settings.angular, left,
                    settings.stall, budget, settings.polish, bool(settings.regularize and program.has_regularizers),
                    settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V,

@@ -32,23 +32,28 @@ class Chain:
     Made by :meth:`of`, which says whether the solver's plan allows it; :meth:`run` solves a stretch.
     """
 
-    def __init__(self, problem: Problem, P: np.ndarray, plan, request: Request, solver: str):
-        self.problem, self.P, self.plan, self.request, self.solver = problem, P, plan, request, solver
+    def __init__(self, problem: Problem, P: np.ndarray, follows: tuple[np.ndarray, np.ndarray], plan,
+                 request: Request, solver: str):
+        self.problem, self.P, self.follows, self.plan, self.request = problem, P, follows, plan, request
+        self.solver = solver
         self.state = BatchState.start(problem.program, np.zeros((P.shape[0], problem.robot.n)))
         self.streams = np.zeros(P.shape[0], dtype=np.uint64)
+        self.watch()
 
     @classmethod
-    def of(cls, problem: Problem, P: np.ndarray, method: IKSolver, request: Request) -> Chain | None:
-        """The chain of ``problem`` at the waypoints' parameters ``P`` ``(K, p)`` (a task's ``path_parameters``:
-        each waypoint's targets; the regularizers' reference, the previous solution, is written as the path is
-        solved), solved by ``method`` with ``request``'s tolerances and budgets, or ``None`` when a waypoint's
+    def of(cls, problem: Problem, planned: tuple[np.ndarray, tuple[np.ndarray, np.ndarray]], method: IKSolver,
+           request: Request) -> Chain | None:
+        """The chain of ``problem`` at a task's ``path_parameters``: ``(P, follows)``, each waypoint's parameters
+        ``P (K, p)`` and the slots that follow the previous solution (the motion terms' reference, written as the
+        path is solved), solved by ``method`` with ``request``'s tolerances and budgets, or ``None`` when a waypoint's
         solve is not the engine alone (no plan: a global phase first, a weighted sum that decides, collision terms
         solved first without them) or reads what the compiled loop does not (terms without a compiled form)."""
         program = problem.program
         plan = method.batch_plan(problem, request)
         if plan is None or not program.task_rows or program.layout.generic:
             return None
-        return cls(problem, np.ascontiguousarray(P, dtype=float), plan, request, method.name)
+        P, follows = planned
+        return cls(problem, np.ascontiguousarray(P, dtype=float), follows, plan, request, method.name)
 
     def run(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> tuple[list[IKResult], bool]:
         """Solve waypoints ``k, k + 1, ...`` (at most :data:`~framework.engine.batch.CHUNK`) from ``previous``
@@ -61,8 +66,17 @@ class Chain:
         saved = rng.bit_generator.state
         self.streams[items] = rng.integers(0, 2**63, size=items.size).astype(np.uint64)
         rng.bit_generator.state = saved
-        done = follow_items(self.problem.program, self.P, state, items, self.plan.first, self.streams)
+        done = follow_items(self.problem.program, self.P, state, items, self.plan.first, self.streams, self.follows)
         return [self._result(int(i)) for i in items[:done]], done < items.size
+
+    def watch(self) -> None:
+        """Remember the terms' versions (after the tracking loop moved targets itself, or at the start)."""
+        self._versions = [t.version for t in self.problem.program.terms]
+
+    def changed(self) -> bool:
+        """Whether a term changed since :meth:`watch` (a callback moved one, e.g. an extra term's target): the
+        stretch's later waypoints were solved with the old one, and the chain's parameters are stale."""
+        return any(t.version != v for t, v in zip(self.problem.program.terms, self._versions))
 
     @staticmethod
     def spend(rng: np.random.Generator, count: int) -> None:

@@ -141,8 +141,8 @@ def track(
                         problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
                                           priorities=priorities)
                     if chained:  # once, from the first waypoint's problem (every waypoint's has its layout)
-                        chained, P = False, planner(problem, trajectory)
-                        chain = None if P is None else Chain.of(problem, P, method, make_request(
+                        chained, planned = False, planner(problem, trajectory)
+                        chain = None if planned is None else Chain.of(problem, planned, method, make_request(
                             problem, tolerance=tolerance, max_iterations=iterations_per_point, population=population,
                             stop_at_tolerance=stop_at_tolerance, initial=previous))
                     seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start,
@@ -155,6 +155,8 @@ def track(
                         stop_reason = "interrupted"
                         break
                     results, missed = [result], False
+                    if chain is not None:
+                        chain.watch()
                 kept = 0
                 try:
                     for result in results:
@@ -164,6 +166,9 @@ def track(
                         k, kept = k + 1, kept + 1
                         if callback is not None and callback(k - 1, result):
                             stop_reason = "callback"
+                            break
+                        if chain is not None and chain.changed():  # the callback moved a term: the rest of
+                            chain = None  # the stretch is stale, and the path goes on one solve per waypoint
                             break
                 finally:
                     if chained_results:  # the seeds of the waypoints kept (those past a stop are not the path's)

@@ -154,11 +154,12 @@ class TrackingTask:
             targets["follower"] = positions + self.offset
         return targets
 
-    def path_parameters(self, problem: Problem, trajectory: Trajectory) -> np.ndarray:
-        """``(K, p)``: the parameters of ``problem`` (built by :meth:`objective`) at every waypoint of
-        ``trajectory``, the targets moved as :meth:`update` moves them; the motion terms' reference is the previous
-        solution, which the program's :attr:`~framework.costs.program._Layout.reference_slots` hold (it is written
-        there as the path is solved)."""
+    def path_parameters(self, problem: Problem,
+                        trajectory: Trajectory) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """``(P, follows)``: the parameters ``P (K, p)`` of ``problem`` (built by :meth:`objective`) at every
+        waypoint of ``trajectory``, the targets moved as :meth:`update` moves them, and the parameters that follow
+        the previous solution (the motion terms' reference: slots and coordinates, written as the path is solved;
+        an extra term's own reference stays)."""
         program = problem.program
         program.refresh()
         P = np.tile(program.prog[2], (trajectory.K, 1))
@@ -166,7 +167,8 @@ class TrackingTask:
         for name, targets in self.targets(trajectory.positions, trajectory.rotations).items():
             start, stop = program.layout.param_spans[problem.names.index(name)]
             P[:, start:stop] = terms[name].target_parameters(problem.robot, targets)
-        return P
+        motion = [problem.names.index(f"motion[{group}]") for group in self.motion]
+        return P, program.layout.references_of(motion)
 
     def frames(self, robot: Robot) -> tuple[str, ...]:
         """The frames that track: the main frame and, if any, the follower."""
