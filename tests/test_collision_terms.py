@@ -195,6 +195,37 @@ def test_a_loose_cover_keeps_the_answer_without_the_terms_when_coal_finds_it_cle
     assert kept >= 3
 
 
+def test_a_loose_cover_tries_other_drawn_starts_without_the_terms_before_the_sphere_rows(erd):
+    """A PR2 two-hand pose over a table (benchmarks/collisions.py's target 33, seed 33) whose first answers without
+    the collision terms touch the table or the robot, and which the sphere rows' engine never meets (its spheres
+    are fatter than the links: 1,700 restarts missed): another drawn start without the terms gives an answer coal
+    finds clear. Success and clearance are checked here by Pinocchio FK and coal."""
+    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
+           "wrist_roll")
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    scene = fw.Scene((fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table"),))
+    poses = {"l_gripper_tool_frame": [0.6341914987592463, -0.461850130079126, 1.2527543663617564,
+                                      0.4948193036205476, 0.8674107038673525, -0.05246453641099369,
+                                      -0.8443236955996358, 0.4941777036020543, 0.20713738028558132,
+                                      0.20559998495488674, -0.05819852299624405, 0.9769040782531345],
+             "r_gripper_tool_frame": [0.6638783666271535, 0.029684499404211744, 0.9052835716355594,
+                                      0.9580969637586652, -0.15053467975516427, -0.24369964757347798,
+                                      -0.2763496543388752, -0.7096311684613702, -0.648116095537624,
+                                      -0.07537291677526758, 0.6883043766671548, -0.7214956746077056]}
+    objective = 0.1 * fw.Motion("all", robot.middle)
+    for frame, p in poses.items():
+        objective = objective + fw.Pose(frame, (np.array(p[:3]), np.array(p[3:]).reshape(3, 3)))
+    problem = fw.Problem(robot, objective + fw.SelfCollision(shape) + fw.Obstacles(shape, scene))
+    result = fw.solve(problem, seed=33, tolerance=1e-6)
+    assert result.success and result.settings["clear_first"]
+    for frame, p in poses.items():
+        M = robot.frame_placement(result.configuration, frame)
+        assert np.linalg.norm(M.translation - p[:3]) <= 1e-6
+    assert not shape.check(result.configuration, scene=scene, distances=False).colliding
+
+
 def test_the_fast_check_with_a_margin_finds_the_pairs_closer_than_it(erd, rng):
     """``check(x, margin, distances=False)`` (coal's security margin) flags exactly the pairs whose distance
     (coal's distance computation on every pair) is below the margin, on PR2's meshes (tested on their convex hulls
