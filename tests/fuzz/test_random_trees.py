@@ -43,3 +43,32 @@ def test_hybrid_reaches_reachable_poses(seed):
     rate over 400 trees is in docs/reliability.md; this samples 40)."""
     success, position, angle = reach_reachable_pose(seed)
     assert success and position <= 1e-9 and angle <= 1e-9, (seed, position, angle)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(trees())
+def test_chained_tracking_is_one_solve_per_waypoint(tree):
+    """On random trees (mimic, continuous, prismatic joints): a path of a leaf frame (FK of a straight joint-space
+    segment), tracked with compiled stretches, gives bit for bit what one solve per waypoint gives."""
+    from framework.problem import Problem
+    from framework.tracking import FIRST_GLOBAL_ITERATIONS, TrackingTask, track
+    from framework.trajectory import Trajectory
+
+    robot = fw.robot_from_urdf(tree.urdf)
+    rng = np.random.default_rng(tree.seed)
+    a, b = robot.random_configurations(rng, 2)
+    frame = tree.leaves[0]
+    path = Trajectory(np.array([robot.frame_placement(a + (b - a) * s, frame).translation
+                                for s in np.linspace(0.0, 0.3, 8)]), name="segment")
+    spec = TrackingTask(frame=frame, motion=0.01)
+    result = track(robot, path, spec, solver="hybrid", seed=tree.seed, progress=False)
+    generator, previous = np.random.default_rng(tree.seed), robot.middle.copy()
+    problem = Problem(robot, spec.objective(robot, 0, path.positions[0], None, previous))
+    for k in range(path.K):
+        spec.update(problem.objective, path.positions[k], None, previous)
+        first = {"global_iterations": FIRST_GLOBAL_ITERATIONS} if k == 0 else None
+        one = fw.solve(problem, "hybrid", seed=generator, max_iterations=300, tolerance=1e-4, initial=previous[None],
+                       options=first)
+        assert np.array_equal(result.configurations[k], one.configuration), k
+        assert result.success[k] == one.success
+        previous = one.configuration
