@@ -8,6 +8,7 @@ placement_taskfile`) write numbers as expressions (``"pi/6"``, ``"[0.3, 0, t[2]]
 from __future__ import annotations
 
 import ast
+import functools
 import operator
 import sys
 from collections.abc import Mapping
@@ -74,7 +75,7 @@ def evaluate(expression: Any, variables: Mapping[str, Any], where: str) -> np.nd
     if not isinstance(expression, str):
         raise TaskError(f"{where}: expected a number, list or expression, got {expression!r}")
     try:
-        tree = ast.parse(expression, mode="eval")
+        tree = _parsed(expression)
     except SyntaxError as err:
         raise TaskError(f"{where}: cannot parse expression {expression!r}") from err
     names = {"pi": np.pi, **variables}
@@ -107,6 +108,13 @@ def evaluate(expression: Any, variables: Mapping[str, Any], where: str) -> np.nd
         raise TaskError(f"{where}: {expression!r} is not a number/vector expression")
 
     return walk(tree)
+
+
+@functools.lru_cache(maxsize=4096)
+def _parsed(expression: str) -> ast.Expression:
+    """The syntax tree of an expression, parsed once (a path's terms evaluate the same strings at every
+    waypoint; the tree is only read)."""
+    return ast.parse(expression, mode="eval")
 
 
 def expression_names(expression: str) -> set[str]:

@@ -79,7 +79,7 @@ import numpy as np
 
 from .collision import RobotShape
 from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective,
-                    Obstacles, Orientation, Position, RelativePose, RelativePosition, SelfCollision)
+                    Obstacles, Orientation, Position, Program, RelativePose, RelativePosition, SelfCollision, Term)
 from .errors import MetaikError, TaskError
 from .fabrik.taskfile import ReachTask, is_reach_task, reach_task_from_dict
 from .loading import load_robot
@@ -307,7 +307,7 @@ class _World:
 
 
 def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray, world: _World) -> Objective:
-    objective = None
+    pairs: list[tuple[float, Term]] = []  # one Objective at the end (each ``+`` would check every pair again)
     for i, spec in enumerate(terms):
         where = f"[[terms]] #{i + 1}"
         kind = spec.get("type")
@@ -363,9 +363,8 @@ def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarr
                 term = JointLimitPenalty(name=name or "joint_limits")
         except KeyError as err:
             raise TaskError(f"{where} ({kind}) needs a {err.args[0]!r} entry") from None
-        weighted = weight * term
-        objective = weighted if objective is None else objective + weighted
-    return objective
+        pairs.append((weight, term))  # (Objective checks the weights)
+    return Objective(tuple(pairs))
 
 
 # ---------------------------------------------------------------------------------------------- tracking
@@ -386,12 +385,12 @@ class _TermsAtWaypoint:
         """``(P, follows)``: the parameters ``P (K, p)`` of ``problem`` (built by this builder) at every waypoint of
         ``trajectory``, and those that follow the previous solution (the reference of the motion terms without a
         ``previous`` of their own), for :func:`framework.tracking.track`'s compiled stretches; ``None`` when the
-        waypoints' objectives differ in more than their parameters (their terms or weights)."""
+        waypoints' objectives differ in more than their parameters (their terms or weights; or the problem added
+        a term of its own, as ``bounds="penalty"`` adds a joint-limit penalty)."""
         program = problem.program
         P = np.empty((trajectory.K, program.prog[2].size))
         for k in range(trajectory.K):
-            at = Problem(self.robot, self(k, trajectory.positions[k], trajectory.rotation(k), self.robot.middle),
-                         bounds=problem.bounds, priorities=problem.priorities).program
+            at = Program(self.robot, self(k, trajectory.positions[k], trajectory.rotation(k), self.robot.middle))
             if at.layout is not program.layout or at.weight_list != program.weight_list:
                 return None
             P[k] = at.prog[2]
