@@ -102,7 +102,7 @@ def solve_batch(
             :mod:`framework.cluster`); the result is the same.
     """
     started = time.perf_counter()
-    P, B = _parameters(problem, targets)
+    P, B = item_parameters(problem, targets)
     seeds = _seeds(seed, B)
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configurations")
@@ -233,8 +233,9 @@ def _targeted(problem: Problem, targets) -> dict[str, tuple[Term, Sequence]]:
     return {movable[0]: (terms[movable[0]], targets)}
 
 
-def _parameters(problem: Problem, targets) -> tuple[np.ndarray, int]:
-    """``(B, p)`` the program's parameters of every item, and ``B``."""
+def item_parameters(problem: Problem, targets) -> tuple[np.ndarray, int]:
+    """``(B, p)`` the program's parameters of every item (``targets`` as :func:`solve_batch` takes them: the
+    other terms' parameters as they stand), and ``B``."""
     program = problem.program
     program.refresh()
     columns = {}

@@ -119,7 +119,7 @@ def _parsed(expression: str) -> ast.Expression:
 
 def expression_names(expression: str) -> set[str]:
     try:
-        tree = ast.parse(expression, mode="eval")
+        tree = _parsed(expression)
     except SyntaxError:
         return set()
     return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}

@@ -163,7 +163,7 @@ def solve_local(
         multipliers = np.zeros(program.task_rows)
         code = newton.regularize(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
                                  settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
-        regularized = _REGULARIZE_STATUS[int(code)]
+        regularized = regularized_status(code)
         evaluations += int(stats[1])
     status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
     if not program.task_rows and not regularized:  # nothing ran: the values at the start

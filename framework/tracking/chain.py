@@ -89,7 +89,7 @@ class Chain:
         state = self.state
         settings = {**self.plan.report, "restart_count": int(state.counts[i, 2]),
                     "regularized": regularized_status(int(state.regularized[i]))}
-        outcome = Outcome(state.X[i].copy(), "tolerance", int(state.counts[i, 0]), int(state.counts[i, 1]), None,
-                          settings, task_errors=state.E[i].copy(), values=state.V[i].copy())
+        outcome = Outcome(state.X[i], "tolerance", int(state.counts[i, 0]), int(state.counts[i, 1]), None, settings,
+                          task_errors=state.E[i], values=state.V[i])  # (result_of copies x, reads the rows once)
         start = time.perf_counter() - 1e-9 * state.spent_ns[i]  # the wall time counts the compiled solve
         return result_of(self.problem, outcome, self.solver, self.request, start)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
+from ..batch import item_parameters
 from ..costs.base import Term, check_weight
 from ..errors import TaskError
 from ..problem import Problem
@@ -160,15 +161,9 @@ class TrackingTask:
         waypoint of ``trajectory``, the targets moved as :meth:`update` moves them, and the parameters that follow
         the previous solution (the motion terms' reference: slots and coordinates, written as the path is solved;
         an extra term's own reference stays)."""
-        program = problem.program
-        program.refresh()
-        P = np.tile(program.prog[2], (trajectory.K, 1))
-        terms = dict(zip(problem.names, program.terms))
-        for name, targets in self.targets(trajectory.positions, trajectory.rotations).items():
-            start, stop = program.layout.param_spans[problem.names.index(name)]
-            P[:, start:stop] = terms[name].target_parameters(problem.robot, targets)
+        P, _ = item_parameters(problem, self.targets(trajectory.positions, trajectory.rotations))
         motion = [problem.names.index(f"motion[{group}]") for group in self.motion]
-        return P, program.layout.references_of(motion)
+        return P, problem.program.layout.references_of(motion)
 
     def frames(self, robot: Robot) -> tuple[str, ...]:
         """The frames that track: the main frame and, if any, the follower."""
