@@ -126,12 +126,13 @@ def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):
 
 
 def test_contact_rows_cost_nothing_where_the_descent_stays_clear(rng):
-    """The engine descends without the contact rows first (they are evaluated when the rest is met): where the
-    free descent ends clear of them (paper 000's four targets from its q_prev), the descent with a SelfCollision
-    term is the free problem's, step for step (the same iterations and configuration, up to the last polishing
-    step's rounding, which sees the zero contact rows); where the free
-    answer is in contact (random targets from random starts: the dual youBot's arms are close), the engine goes
-    on and ends with every row within tolerance. A trivial method — the free answer — is in contact there."""
+    """The engine descends without the contact rows first (they are evaluated when the rest is met): where that
+    descent ends clear of them (paper 000's four targets from its q_prev), the descent with a SelfCollision
+    term is step for step that of the problem whose only contact rows can never be violated (an obstacle 50 m
+    away: a problem with contact rows, as the engine's damping rule sees it; the same iterations and
+    configuration, up to the last polishing step's rounding); where that answer is in contact (random targets
+    from random starts: the dual youBot's arms are close), the engine goes on and ends with every row within
+    tolerance. A trivial method — the answer without the term — is in contact there."""
     from framework.engine import LocalSettings, solve_local
     from framework.taskfile import load_task
 
@@ -139,6 +140,7 @@ def test_contact_rows_cost_nothing_where_the_descent_stays_clear(rng):
     robot = task.robot
     shape = fw.RobotShape(robot)
     settings = LocalSettings(tolerance=1e-9, restarts=False, regularize=False, max_iterations=200)
+    far = fw.Obstacles(shape, [fw.Sphere([50.0, 50.0, 50.0], 0.05)], margin=0.005)
     starts = [(c.problem.previous, [t.target for _, t in c.problem.objective if t.is_task]) for c in task.cases]
     for _ in range(10):
         x = robot.random_configurations(rng, 2)
@@ -146,7 +148,7 @@ def test_contact_rows_cost_nothing_where_the_descent_stays_clear(rng):
     same = contact = 0
     for x0, (t1, t2) in starts:
         objective = fw.Position("arm1_ee", t1) + fw.Position("arm2_ee", t2)
-        free = fw.Problem(robot, objective)
+        free = fw.Problem(robot, objective + far)
         whole = fw.Problem(robot, objective + fw.SelfCollision(shape, margin=0.005))
         a = solve_local(free.program, x0, 0, settings)
         b = solve_local(whole.program, x0, 0, settings)
