@@ -1,14 +1,19 @@
 """Reaching the task: bounded Levenberg-Marquardt on the stacked task residuals, with random restarts.
 
 One compiled loop, TRAC-IK's strategy written as one function. Each iteration takes the damped Gauss-Newton
-step ``dx = −(JᵀJ + λI)⁻¹Jᵀr`` with ``λ = μ‖r‖²`` (damping that fades as the residual does, so the last steps
-are Gauss-Newton's quadratic ones). ``μ`` follows the step's gain ratio ``ρ`` (the drop of ``‖r‖²`` over the drop
-its linearization predicted; Nielsen's rule, Madsen, Nielsen & Tingleff, *Methods for non-linear least squares
-problems*, 2004): ×``max(1/3, 1 − (2ρ − 1)³)`` after a step that lowers ``‖r‖`` — down by up to 3 where the model
-holds, up where it does not — and ×4 after one that does not. Problems with contact rows keep a fixed ÷4 after
-an accepted step (:data:`CONTACT_DAMPING_DOWN`): on the dual youBot with self-collision the gain rule, even only
-before the contact rows come in, ended on costlier answers (20-24 of 100 targets costlier, 9-10 cheaper; the lazy
-descent's landing point decides which contact the regularizers meet) and was no faster.
+step ``dx = −(JᵀJ + λI)⁻¹Jᵀr`` with ``λ = μ‖r‖`` (damping that fades as the residual does, so the last steps
+are Gauss-Newton's quadratic ones; Fan & Yuan's choice, *Computing* 74, 2005). ``μ`` follows the step's gain
+ratio ``ρ`` (the drop of ``‖r‖²`` over the drop its linearization predicted; Nielsen's rule, Madsen, Nielsen &
+Tingleff, *Methods for non-linear least squares problems*, 2004): ×``max(1/3, 1 − (2ρ − 1)³)`` after a step that
+lowers ``‖r‖`` — down by up to 3 where the model holds, up where it does not — and ×4 after one that does not.
+This is for problems whose task is all there is. Where regularizers choose among the task's solutions (motion
+terms) or contact rows bend the descent, the point where the descent lands decides which local minimum the
+regularizers reach, and the engine keeps the rule these replaced: ``λ = μ‖r‖²`` and a fixed ÷4 after an
+accepted step (:data:`LANDING_DAMPING_DOWN`). The new rule there, measured: the dual youBot's two hands at 60
+random targets with paper 000's motion terms, answers 1.1 % costlier on average and one left 0.32 above a local
+minimum (its Newton phase capped), though on the 100 targets of benchmarks/collisions.py without the collision
+term 13 were cheaper and 5 costlier; with that term, 20-24 costlier and 9-10 cheaper, and slower; PR2's two hands
+(300 pairs), 20 costlier and 16 cheaper.
 Steps stay in the search box: a coordinate held at a bound that the step pushes outward is taken out of the
 step (its Jacobian column zeroed, the step solved again), the rest is clipped, and continuous joints wrap
 around. A start whose ``‖r‖²`` has not dropped by 10 % in ``stall`` iterations is abandoned for a configuration
@@ -31,7 +36,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..costs.blocks import KIND, LEVEL, LEVEL_TASK, ROWS, is_contact, is_hinge
+from ..costs.blocks import KIND, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS, is_contact, is_hinge
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace
 from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
 from .clock import monotonic_ns
@@ -41,13 +46,16 @@ from .linalg import least_norm_step, levenberg_marquardt_step
 #: Status codes of :func:`reach`.
 REACHED, ITERATIONS, DEADLINE, STARTS = 0, 1, 2, 3
 #: ``μ`` at each (re)start, its floor, the ceiling where a start counts as stalled, its factor after a rejected
-#: step and the smallest factor after an accepted one (Nielsen's rule, see the module). The gain-ratio rule against
-#: the fixed ÷4 it replaced, 1,500 FK-sampled poses per arm from the middle (not those of benchmarks/pose_ik.py):
-#: iterations at the median 14 -> 12 (UR5), 9 -> 8 (Panda, Baxter), 11 -> 10 (Puma 560), mean -4 % to -14 %, p95
-#: -6 % to -14 %; ×ν on rejection (ν = 2, doubling), μ₀ = 0.01 or 1, and a floor of ⅕ were each no better.
+#: step and the smallest factor after an accepted one (Nielsen's rule, see the module). Against the rule they
+#: replaced (``λ = μ‖r‖²``, ÷4), on 1,500 FK-sampled poses per arm from the middle (not those of
+#: benchmarks/pose_ik.py), iterations at the median / mean / p95: UR5 14 / 23.3 / 76 -> 11 / 18.6 / 58, Panda
+#: 9 / 20.1 / 79 -> 8 / 17.2 / 63, Baxter 9 / 19.4 / 70 -> 8 / 16.6 / 58, Puma 560 11 / 25.2 / 103 -> 9 / 22.9 / 91
+#: (the gain rule alone: 12, 8, 8, 10 at the median). Each no better on the same poses: ×ν on rejection (ν = 2,
+#: doubling), μ₀ = 0.01, 0.03, 0.3 or 1, a floor of ⅕.
 DAMPING_START, DAMPING_MIN, DAMPING_MAX, DAMPING_UP, DAMPING_DOWN = 0.1, 1e-12, 1e8, 4.0, 1.0 / 3.0
-#: ``μ``'s factor after an accepted step once the contact rows are on (kinked: no gain ratio to read).
-CONTACT_DAMPING_DOWN = 0.25
+#: ``μ``'s factor after an accepted step on problems with regularizers or contact rows (where ``λ = μ‖r‖²``; see
+#: the module).
+LANDING_DAMPING_DOWN = 0.25
 #: A start progresses while ``‖r‖²`` drops below this fraction of its last checkpoint within ``stall`` steps.
 PROGRESS = 0.9
 #: ``‖r‖²`` at which polishing stops: ``‖r‖ <= 1e-15``, machine precision for residuals of order one.
@@ -225,6 +233,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     lazy_bint, has_contacts = without_contacts(prog[0])
     lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
     lazy = has_contacts  # the descent sees the blocks without the contact rows first
+    landing = has_contacts or rows_of(prog, LEVEL_REGULARIZER) > 0  # where the descent lands matters (see module)
     cur = lazy_prog if lazy else prog
     drew = max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1) if drawn else 0
     project(x, lower, upper, box_wrap)
@@ -270,7 +279,8 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             break
         iterations += 1
         accepted = False
-        if bounded_step(x, ws[4][:m], ws[3][:m], damping * e, lower, upper, box_wrap, Jc, A, L, y, dx):
+        if bounded_step(x, ws[4][:m], ws[3][:m], damping * (e if landing else np.sqrt(e)), lower, upper, box_wrap,
+                        Jc, A, L, y, dx):
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
@@ -279,7 +289,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             et = squared_norm(trial[3], m)
             if et < e:
                 accepted = True
-                factor = CONTACT_DAMPING_DOWN if has_contacts else \
+                factor = LANDING_DAMPING_DOWN if landing else \
                     gain_factor(e, et, ws[4][:m], ws[3][:m], x, xt, dx, box_wrap)
                 damping = max(damping * factor, DAMPING_MIN)
                 linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
