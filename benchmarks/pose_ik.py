@@ -22,9 +22,9 @@ own test is per twist component, and that is the setting whose test implies the 
 
 Writes docs/results/pose_ik.md.
 
-Held-out poses: the engine's constants (damping schedule, stall rule) were tuned on 300 poses per arm (UR5, Panda,
-Baxter) drawn with another seed by numpy; the poses here are TRAC-IK's (seed 2026), none of which the tuning saw,
-and Puma 560 was not part of the tuning at all.
+Held-out poses: the engine's constants were tuned on other FK-sampled poses drawn by numpy with other seeds (the
+stall rule on 300 per arm: UR5, Panda, Baxter; the damping rule on 1,500 per arm, Puma 560 included); the poses here
+are TRAC-IK's (seed 2026), none of which the tuning saw.
 """
 
 from __future__ import annotations
