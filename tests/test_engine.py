@@ -44,6 +44,36 @@ def test_pose_ik_reaches_random_poses_where_one_descent_does_not(panda, rng):
     assert descent <= 95  # measured 80-90: restarts are what makes it reliable
 
 
+def test_the_damping_follows_the_gain_ratio_of_the_step_taken(panda, rng):
+    """Nielsen's factor of the damping after an accepted step (engine.reach.gain_factor) against the gain ratio
+    computed here with numpy: the drop of ‖r‖² between Panda poses (the engine's residuals, which other tests check
+    against Pinocchio) over the drop the linearization at the start predicts for the step. A wrapping coordinate's
+    step is the one before the wrap (2π off in ``xt − x``). A fixed ÷4 would match neither ρ's range."""
+    from framework.engine.reach import DAMPING_DOWN, gain_factor
+
+    problem = Problem(panda, fw.Pose("panda_hand_tcp", panda.frame_placement(panda.middle, "panda_hand_tcp")))
+    wraps = np.zeros(panda.n, dtype=bool)
+    factors = []
+    for x in panda.random_configurations(rng, 20):
+        r, J = (a.copy() for a in residuals(problem.program, x))
+        for damping in (1e-3, 1e-1, 1e1):
+            dx = np.linalg.solve(J.T @ J + damping * np.eye(panda.n), -J.T @ r)
+            xt = x + dx
+            rt = residuals(problem.program, xt)[0]
+            e, et = float(r @ r), float(rt @ rt)
+            rho = (e - et) / (e - float(np.sum((r + J @ dx) ** 2)))
+            expected = max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3)
+            got = gain_factor(e, et, J, r, x, xt, dx, wraps)
+            assert got == pytest.approx(expected, rel=1e-9, abs=1e-12)
+            factors.append(got)
+            wrapped = xt.copy()
+            wrapped[0] -= 2.0 * np.pi  # the same configuration, wrapped on a full-turn axis
+            around = wraps.copy()
+            around[0] = True
+            assert gain_factor(e, et, J, r, x, wrapped, dx, around) == pytest.approx(got, rel=1e-12, abs=1e-15)
+    assert DAMPING_DOWN == 1.0 / 3.0 and min(factors) == pytest.approx(1.0 / 3.0) and max(factors) > 1.0
+
+
 def test_pose_targets_as_se3_matrix_or_pair_agree(panda, rng):
     tip = "panda_hand_tcp"
     T = panda.frame_placement(panda.random_configurations(rng, 1)[0], tip)
