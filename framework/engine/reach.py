@@ -19,8 +19,9 @@ step (its Jacobian column zeroed, the step solved again), the rest is clipped, a
 around. A start whose ``‖r‖²`` has not dropped by 10 % in ``stall`` iterations is abandoned for a configuration
 drawn uniformly in the box from a seeded stream (:mod:`~framework.engine.draws`), inside the loop. Every task
 block is held to its own tolerance (metres for positions, radians for orientations), and the clock is read at
-every iteration, so a time budget is kept to within one iteration (a few µs). Constants tuned on 300 FK-sampled
-poses per arm (UR5, Panda, Baxter; see benchmarks/pose_ik.py).
+every iteration, so a time budget is kept to within one iteration (a few µs). The stall rule was tuned on 300
+FK-sampled poses per arm (UR5, Panda, Baxter), the damping rule on 1,500 per arm (Puma 560 too; see
+:data:`DAMPING_START`), none of them benchmarks/pose_ik.py's.
 
 Contact rows are taken lazily: each start first descends without the collision blocks (``SPHERES``, ``SOLIDS``,
 the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
