@@ -10,6 +10,7 @@ the package is removed and the new hash stamped. A fresh install has no entries;
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent
@@ -48,3 +49,12 @@ def drop_stale_entries(package: Path = PACKAGE, stamp: Path = STAMP) -> int:
     except OSError:
         pass
     return removed
+
+
+def cold(package: Path = PACKAGE) -> bool:
+    """Whether none of the package's compiled code is cached yet (a fresh install, or sources changed since the
+    cache was stamped): the first solves then compile it, 1-2 minutes on 2 cores. ``False`` where the package's
+    folder cannot be written (numba caches elsewhere then, and this cannot tell)."""
+    if not os.access(package, os.W_OK):
+        return False
+    return next(package.rglob("*.nbi"), None) is None

@@ -60,6 +60,36 @@ def test_run_hybrid_prints_the_table(capsys):
     assert "target 2" in out and "e_t1" in out and "yes" in out
 
 
+def test_a_run_that_compiles_says_so_and_one_that_loads_does_not(monkeypatch, capsys):
+    """A fresh install compiles the kernels in its first solves (minutes of silence otherwise, timed as the
+    solver's): the solving commands say so on stderr, before and after; with the cache warm they say nothing."""
+    from framework import numba_cache
+
+    monkeypatch.setattr(numba_cache, "cold", lambda: True)
+    assert main(["run", str(TASK), "--solver", "hybrid", "--case", "target 2"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "compiling its solver kernels" in err and "include that compilation" in err
+    monkeypatch.setattr(numba_cache, "cold", lambda: False)
+    assert main(["run", str(TASK), "--solver", "hybrid", "--case", "target 2"]) == EXIT_OK
+    assert "compil" not in capsys.readouterr().err
+    assert main(["robots"]) == EXIT_OK
+
+
+def test_the_cache_is_cold_until_a_compiled_entry_is_written(tmp_path):
+    """``numba_cache.cold``: a package folder without numba index files is cold; one entry makes it warm."""
+    from framework import numba_cache
+
+    (tmp_path / "pkg" / "__pycache__").mkdir(parents=True)
+    assert numba_cache.cold(tmp_path / "pkg")
+    (tmp_path / "pkg" / "__pycache__" / "kinematics.fk-1.py311.nbi").write_bytes(b"")
+    assert not numba_cache.cold(tmp_path / "pkg")
+    import framework as fw
+
+    robot = fw.load_robot("youbot_arm")
+    fw.solve(fw.Problem(robot, fw.Position("ee", robot.frame_placement(robot.middle, "ee").translation)))
+    assert not numba_cache.cold()  # this checkout, after a solve: its compiled code is cached beside it
+
+
 def test_run_by_shipped_name_and_missed_tolerance_exit_code(tmp_path, capsys):
     path = tmp_path / "far.toml"
     path.write_text(MINIMAL.replace("[0.3, 0.0, 0.3]", "[2.0, 0.0, 0.3]"))

@@ -14,6 +14,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
+from .. import numba_cache
 from ..errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError
 from ..taskfile import resolve_task
 from .bench import add_bench_command, bench_command
@@ -58,14 +59,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: The commands that solve (and so run compiled code).
+SOLVING = ("run", "bench", "reach")
+COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), 1-2 minutes "
+             "on 2 cores; later runs load them from the cache")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     console = Console()
+    compiling = args.command in SOLVING and numba_cache.cold()
+    if compiling:  # a silent pause of minutes would look like a hang, and its time would be read as the solver's
+        Console(stderr=True).print(COMPILING, highlight=False, soft_wrap=True)
     try:
         commands = {"robots": robots_command, "show": show_command, "run": run_command, "tasks": tasks_command,
                     "solvers": solvers_command,
                     "bench": bench_command, "reach": reach_command, "replay": replay_command}
-        return commands[args.command](args, console)
+        code = commands[args.command](args, console)
+        if compiling:
+            Console(stderr=True).print("(the times above include that compilation)", highlight=False)
+        return code
     except MetaikError as err:
         Console(stderr=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False, markup=True,
                                    soft_wrap=True)
