@@ -147,7 +147,7 @@ def _descend(program: Program, P: np.ndarray, state: BatchState, items: np.ndarr
     left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     prog = list(program.prog)
     prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    return descend(items, state.X, settings.max_restarts, streams, P, follows is not None, follows or _NONE,
+    return descend(items, state.X, settings.max_restarts, streams, P, follows is not None, _NONE if follows is None else follows,
                    lower, upper, box_wrap, program.kin, tuple(prog), settings.tolerance, settings.angular, left,
                    settings.stall, budget, settings.polish, bool(settings.regularize and program.has_regularizers),
                    settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V,

@@ -179,16 +179,13 @@ def rows_of(prog, level) -> int:
 def gain_factor(e, et, Jr, r, x, xt, dx, box_wrap) -> float:
     """Nielsen's factor of ``μ`` after an accepted step from ``x`` to ``xt`` that took ``‖r‖²`` from ``e`` to
     ``et``: ``max(DAMPING_DOWN, 1 − (2ρ − 1)³)`` with ``ρ = (e − et) / (e − ‖r + J d‖²)``, ``d`` the step taken
-    (``xt − x``: clipped at the bounds; ``dx`` on coordinates that wrap around). Clear one-sided rows (zero
-    residual and Jacobian) are skipped."""
+    (``xt − x``: clipped at the bounds; ``dx`` on coordinates that wrap around)."""
     m, n = Jr.shape
     model = 0.0
     for a in range(m):
         s = r[a]
         for i in range(n):
-            J = Jr[a, i]
-            if J != 0.0:
-                s += J * (dx[i] if box_wrap[i] else xt[i] - x[i])
+            s += Jr[a, i] * (dx[i] if box_wrap[i] else xt[i] - x[i])
         model += s * s
     predicted = e - model
     if not predicted > 0.0:
