@@ -16,6 +16,11 @@ from .program import Block, coordinates_block
 NORMS = ("l2", "l1")
 
 
+def motion_name(group: str) -> str:
+    """A motion term's default name for its joint group: ``motion[group]``."""
+    return f"motion[{group}]"
+
+
 class Motion(Term):
     """Distance of a joint group to its previous values (a regularizer).
 
@@ -32,7 +37,7 @@ class Motion(Term):
         if norm not in NORMS:
             raise TaskError(f"motion norm must be one of {NORMS}; got {norm!r}")
         self.group, self.norm = group, norm
-        self.name = name or f"motion[{group}]"
+        self.name = name or motion_name(group)
         self.set_target(previous)
 
     def set_target(self, previous: Sequence[float]) -> None:

@@ -12,6 +12,7 @@ import numpy as np
 from ..costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
 from ..batch import item_parameters
 from ..costs.base import Term, check_weight
+from ..costs.motion import motion_name
 from ..errors import TaskError
 from ..problem import Problem
 from ..robot import Robot
@@ -28,6 +29,10 @@ TrackingCallback = Callable[[int, IKResult], "bool | None"]
 #: under paper 002's weights settles on a branch from which point 2's optimum does not reach).
 FIRST_GLOBAL_ITERATIONS = 30
 COORDINATIONS = ("target", "relative")
+#: The names of the terms a :class:`TrackingTask` builds at every waypoint (its motion terms are named by
+#: :func:`~framework.costs.motion.motion_name`): what :meth:`TrackingTask.objective` names them, :meth:`update`
+#: and :meth:`targets` find them by, and ``extra`` terms may not be named.
+POSITION, ORIENTATION, FOLLOWER, LIMITS = "position", "orientation", "follower", "joint_limits"
 
 #: Step size [rad / m] of a CMA-ES that continues from the previous waypoint's search distribution (solvers with
 #: a ``covariance`` option; the shape: :func:`continued`): its mean starts at the Jacobian prediction, already on
@@ -95,7 +100,7 @@ class TrackingTask:
             object.__setattr__(self, "offset", offset)
         if self.extra is not None:
             extra = Objective.of(self.extra)
-            own = {"position", "orientation", "follower", "joint_limits"} | {f"motion[{g}]" for g in motion}
+            own = {POSITION, ORIENTATION, FOLLOWER, LIMITS} | {motion_name(g) for g in motion}
             clash = sorted(own & {term.name for _, term in extra})
             if clash:
                 raise TaskError(f"extra terms need names other than the path's own terms; got {clash}")
@@ -109,22 +114,22 @@ class TrackingTask:
     ) -> Objective:
         """The weighted terms of waypoint ``k``: position, [orientation], [follower], motion, [limits]."""
         frame = self.frame_of(robot)
-        objective = self.position_weight * Position(frame, position, name="position")
+        objective = self.position_weight * Position(frame, position, name=POSITION)
         if rotation is not None and self.orientation_weight > 0:
-            objective = objective + self.orientation_weight * Orientation(frame, rotation, name="orientation")
+            objective = objective + self.orientation_weight * Orientation(frame, rotation, name=ORIENTATION)
         if self.follower is not None:
             weight = self.position_weight if self.follower_weight is None else self.follower_weight
             if self.coordination == "target":
-                term = Position(self.follower, position + self.offset, name="follower")
+                term = Position(self.follower, position + self.offset, name=FOLLOWER)
             else:
-                term = RelativePosition(frame, self.follower, self.offset, name="follower")
+                term = RelativePosition(frame, self.follower, self.offset, name=FOLLOWER)
             objective = objective + weight * term
         for group, weight in self.motion.items():
             objective = objective + weight * Motion(
-                group, previous, norm=self.motion_norm, name=f"motion[{group}]"
+                group, previous, norm=self.motion_norm, name=motion_name(group)
             )
         if self.joint_limits is not None:
-            objective = objective + JointLimitPenalty(self.joint_limits)
+            objective = objective + JointLimitPenalty(self.joint_limits, name=LIMITS)
         if self.extra is not None:
             objective = objective + self.extra
         return objective
@@ -136,23 +141,23 @@ class TrackingTask:
         Returns False when the objective does not have the shape this waypoint needs (it must be rebuilt).
         """
         terms = {t.name: t for _, t in objective}
-        if ("orientation" in terms) != (rotation is not None and self.orientation_weight > 0):
+        if (ORIENTATION in terms) != (rotation is not None and self.orientation_weight > 0):
             return False
         for name, target in self.targets(position, rotation).items():
             terms[name].set_target(target)
         for group in self.motion:
-            terms[f"motion[{group}]"].set_target(previous)
+            terms[motion_name(group)].set_target(previous)
         return True
 
     def targets(self, positions: np.ndarray, rotations: np.ndarray | None) -> dict[str, np.ndarray]:
         """The targets the path sets, by term name, of one waypoint (``(3,)``, ``(3, 3)`` or ``None``) or of
         many (``(K, 3)``, ``(K, 3, 3)``): position, [orientation], [follower]; the motion terms' reference is the
         previous solution, not part of the path."""
-        targets = {"position": positions}
+        targets = {POSITION: positions}
         if rotations is not None and self.orientation_weight > 0:
-            targets["orientation"] = rotations
+            targets[ORIENTATION] = rotations
         if self.follower is not None and self.coordination == "target":
-            targets["follower"] = positions + self.offset
+            targets[FOLLOWER] = positions + self.offset
         return targets
 
     def path_parameters(self, problem: Problem,
@@ -162,7 +167,7 @@ class TrackingTask:
         the previous solution (the motion terms' reference: slots and coordinates, written as the path is solved;
         an extra term's own reference stays)."""
         P, _ = item_parameters(problem, self.targets(trajectory.positions, trajectory.rotations))
-        motion = [problem.names.index(f"motion[{group}]") for group in self.motion]
+        motion = [problem.names.index(motion_name(group)) for group in self.motion]
         return P, problem.program.layout.references_of(motion)
 
     def frames(self, robot: Robot) -> tuple[str, ...]:
