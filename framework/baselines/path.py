@@ -16,9 +16,11 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..costs import Position, Program
+from ..costs.motion import motion_name
 from ..errors import TaskError
 from ..robot import Robot
 from ..tracking import TrackingResult
+from ..tracking.task import FOLLOWER, POSITION
 from ..trajectory import Trajectory
 from .jacobian import jacobian_ik
 from .relative import RELATIVE_GAIN, SECONDARY_GAIN, relative_jacobian_ik
@@ -145,13 +147,13 @@ def _initial(robot: Robot, initial: np.ndarray | None) -> np.ndarray:
 def _result(robot, trajectory, q0, rows, frames, offset, solver, settings, tolerance) -> TrackingResult:
     Q = np.array([r[0] for r in rows])
     P = robot.frame_poses(Q, frames).positions
-    terms = {"position": np.linalg.norm(P[:, 0] - trajectory.positions, axis=1)}
+    terms = {POSITION: np.linalg.norm(P[:, 0] - trajectory.positions, axis=1)}
     if offset is not None:
-        terms["follower"] = np.linalg.norm(P[:, 1] - P[:, 0] - offset, axis=1)
+        terms[FOLLOWER] = np.linalg.norm(P[:, 1] - P[:, 0] - offset, axis=1)
     position = sum(terms.values())
     orientation = np.zeros(len(Q))
     motion = np.linalg.norm(np.diff(np.vstack([q0, Q]), axis=0), axis=1)
-    terms["motion[all]"] = motion
+    terms[motion_name("all")] = motion
     evaluations = np.array([r[1] for r in rows], dtype=int)
     times = np.array([r[2] for r in rows])
     return TrackingResult(
