@@ -42,6 +42,10 @@ from framework.fabrik import (
 from framework.fabrik.taskfile import ReachRun, run_reach_task
 from framework.taskfile import load_task
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import report  # noqa: E402
+
 OUT = Path(__file__).resolve().parents[1] / "docs" / "results"
 TASKS_DIR = Path(__file__).resolve().parents[1] / "tasks"
 TOLERANCES_MM = (1.0, 0.1, 0.01, 0.001)
@@ -271,18 +275,9 @@ def plot_iterations(path: Path, samples: dict[float, np.ndarray]) -> None:
 
 
 def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        names = [
-            line.split(":", 1)[1].strip()
-            for line in Path("/proc/cpuinfo").read_text().splitlines()
-            if line.startswith("model name")
-        ]
-        cpu = names[0] if names else cpu
-    except OSError:
-        pass
+    """The machine line of :func:`report.machine`, with the OS and the geometry packages this benchmark uses."""
     return (
-        f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, Python "
+        f"{report.cpu_model()}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, Python "
         f"{platform.python_version()}, numpy {np.__version__}, pinocchio {pin.__version__}, "
         f"shapely {shapely.__version__}"
     )
