@@ -1,10 +1,16 @@
-"""Borrowed array views for compiled kernels: no reference counting in the hot loops.
+"""Borrowed array views for compiled kernels: no reference counting in the hot loops; compiled entry points
+resolved once for fixed argument types.
 
 Numba counts references to every array it passes to a function (two atomic operations per array per call).
 With a dozen arrays per helper call that is ~70 ns — more than the arithmetic of a residual block. A kernel
 therefore *borrows* its arrays once at entry (:func:`borrow`: a view of the same memory without an owner) and
 passes the views down; the owning arrays stay referenced by the kernel's arguments, or by a local variable the
 kernel keeps alive to its end (:func:`keep_alive`), so the memory outlives every view.
+
+A call through numba's dispatcher resolves the types of every argument first (for a tuple of arrays, a
+fingerprint string per call): ~2.5 µs for the engine's calls with ~18 arrays, against ~1.1 µs through the
+compiled entry point of the matching specialization. Callers whose argument types are fixed by construction
+resolve that entry point once (:func:`compiled_entry`) and call it directly.
 """
 
 from __future__ import annotations
@@ -12,6 +18,14 @@ from __future__ import annotations
 import numba
 from numba.core import cgutils, types
 from numba.extending import intrinsic
+
+
+def compiled_entry(dispatcher, args: tuple):
+    """The compiled entry point of the numba function ``dispatcher`` for the types of ``args`` (loaded from the
+    disk cache or compiled on first use, as a dispatched call would). A call through it skips the per-call type
+    resolution and does not check its arguments: the caller must pass arguments of exactly these types (dtypes,
+    dimensions, layouts, read-only flags, scalar kinds) on every call."""
+    return dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
 
 
 @intrinsic

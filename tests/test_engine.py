@@ -315,3 +315,41 @@ def test_a_blocking_row_is_cut_at_its_boundary_and_never_held_past_x():
     r_only = np.where(np.arange(m) == 0, r, 0.0)  # only row 0: clear at x by its linearization
     assert _entered(x, xt, box_wrap, hinge, r_x, held, r_only, G, delta, Jb, cb, sb)
     assert cb[0] == pytest.approx(c[0]) and sb[0] == 1.0
+
+
+def test_the_engine_through_its_resolved_entry_points_gives_the_dispatched_answers(panda, rng, monkeypatch):
+    """``solve_local`` calls ``reach`` and ``regularize`` through compiled entry points resolved once per layout
+    (numba's per-call type resolution skipped): Panda poses, and the dual youBot's positions with motion terms
+    (both phases), give bit for bit the answers of calls through numba's dispatchers."""
+    import framework.engine.local as local
+
+    youbot = fw.load_robot("youbot_dual_mobile")
+    q = youbot.middle
+    problems = [Problem(panda, fw.Pose("panda_hand_tcp", panda.frame_placement(x, "panda_hand_tcp")))
+                for x in panda.random_configurations(rng, 10)]
+    for x in youbot.random_configurations(rng, 10):
+        problems.append(Problem(youbot, fw.Position("arm1_ee", youbot.frame_placement(x, "arm1_ee").translation)
+                                + fw.Position("arm2_ee", youbot.frame_placement(x, "arm2_ee").translation)
+                                + 0.1 * fw.Motion("base", q) + 0.4 * fw.Motion("arm1", q)
+                                + 0.4 * fw.Motion("arm2", q)))
+    settings = LocalSettings(tolerance=1e-9)
+    resolved = [solve_local(p.program, p.robot.middle, k, settings) for k, p in enumerate(problems)]
+    assert all(p.program.layout.entries for p in problems)  # the entry points were resolved and kept
+    monkeypatch.setattr(local, "_entry", lambda program, kernel, args: kernel)
+    dispatched = [solve_local(p.program, p.robot.middle, k, settings) for k, p in enumerate(problems)]
+    assert sum(r.regularized is not None for r in resolved) == 10
+    for a, b in zip(resolved, dispatched):
+        assert a.reached and np.array_equal(a.x, b.x) and np.array_equal(a.task_errors, b.task_errors)
+        assert (a.iterations, a.evaluations, a.regularized) == (b.iterations, b.evaluations, b.regularized)
+
+
+def test_the_engine_refuses_starts_and_streams_of_other_shapes(panda):
+    """The entry points do not check types: ``solve_local`` refuses what would not match them, naming it."""
+    problem = Problem(panda, fw.Pose("panda_hand_tcp", panda.frame_placement(panda.middle, "panda_hand_tcp")))
+    with pytest.raises(fw.SolverError, match="start must be 7 joint coordinates"):
+        solve_local(problem.program, np.zeros((2, 7)), 0)
+    with pytest.raises(fw.SolverError, match="restart stream"):
+        solve_local(problem.program, panda.middle, np.zeros(1))  # float64, not a uint64 stream
+    settings = LocalSettings(tolerance=1, max_iterations=np.int32(50))  # plain numbers for the compiled calls
+    assert type(settings.tolerance) is float and type(settings.max_iterations) is int
+    assert solve_local(problem.program, panda.middle, 0, settings).reached

@@ -98,6 +98,9 @@ class _Layout:
     """
 
     def __init__(self, robot: Robot, terms: tuple[Term, ...], packed: list[tuple[Block, ...] | None]):
+        #: compiled entry points resolved for this layout's argument types, by kernel (the local engine's; a
+        #: program's arrays have the same types as every other program's of its layout)
+        self.entries: dict = {}
         levels = [_LEVELS[t.level] for t in terms]
         frames = list(dict.fromkeys(f for p in packed if p for block in p for f in block.frames))
         self.frames = tuple(frames)

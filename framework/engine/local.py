@@ -21,6 +21,7 @@ from ..costs.blocks import LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS
 from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
+from ..native import compiled_entry
 from . import newton
 from .draws import draws, stream
 from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
@@ -70,6 +71,15 @@ class LocalSettings:
                 raise SolverError(f"local engine: {name} must be an integer >= 0; got {value!r}")
         if self.time_budget is not None and not (np.isfinite(self.time_budget) and self.time_budget > 0):
             raise SolverError(f"local engine: time_budget must be a positive number of seconds; got {self.time_budget!r}")
+        # plain Python numbers: the compiled calls take them through entry points resolved for these types
+        for name in ("tolerance", "smoothing"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        if self.angle_tolerance is not None:
+            object.__setattr__(self, "angle_tolerance", float(self.angle_tolerance))
+        for name in ("max_iterations", "stall", "polish", "regularize_iterations"):
+            object.__setattr__(self, name, int(getattr(self, name)))
+        object.__setattr__(self, "restarts", bool(self.restarts))
+        object.__setattr__(self, "regularize", bool(self.regularize))
 
     @property
     def angular(self) -> float:
@@ -139,12 +149,19 @@ def solve_local(
     """
     program.refresh()
     lower, upper, box_wrap = search_box(program)
-    rng = rng if isinstance(rng, np.ndarray) else stream(rng)
+    n = program.robot.n
+    if not isinstance(rng, np.ndarray):
+        rng = stream(rng)
+    elif rng.dtype != np.uint64 or rng.shape != (1,) or not rng.flags.writeable:
+        raise SolverError(f"local engine: a restart stream is a writeable uint64 array of shape (1,) (see "
+                          f"framework.engine.draws.stream); got {rng.dtype} {rng.shape}")
     drawn = x0 is None
     if drawn and not program.task_rows:  # no descent to draw it
         x = draws(rng, lower, upper, 1)[0]
     else:
-        x = np.empty(program.robot.n) if drawn else np.array(x0, dtype=float)
+        x = np.empty(n) if drawn else np.array(x0, dtype=float)
+        if x.shape != (n,):
+            raise SolverError(f"local engine: the start must be {n} joint coordinates; got shape {x.shape}")
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
     deadline_ns = _nanoseconds(deadline)
@@ -153,16 +170,18 @@ def solve_local(
     values = np.zeros(len(program.terms))
     code = REACHED
     if program.task_rows:
-        code = reach(x, drawn, settings.max_restarts, rng,
-                     lower, upper, box_wrap, program.kin, program.prog, settings.tolerance, settings.angular,
-                     settings.max_iterations, settings.stall, deadline_ns, settings.polish, errors, values, stats)
+        args = (x, drawn, settings.max_restarts, rng, lower, upper, box_wrap, program.kin, program.prog,
+                settings.tolerance, settings.angular, settings.max_iterations, settings.stall, deadline_ns,
+                settings.polish, errors, values, stats)
+        code = _entry(program, reach, args)(*args)
     iterations, evaluations, restarts = stats.tolist()
     reached = code == REACHED
     regularized = multipliers = None
     if reached and settings.regularize and program.has_regularizers:
         multipliers = np.zeros(program.task_rows)
-        code = newton.regularize(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
-                                 settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
+        args = (x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
+                settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
+        code = _entry(program, newton.regularize, args)(*args)
         regularized = regularized_status(code)
         evaluations += int(stats[1])
     status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
@@ -173,6 +192,18 @@ def solve_local(
 
 
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
+
+
+def _entry(program: Program, kernel, args: tuple):
+    """``kernel``'s compiled entry point for :func:`solve_local`'s ``args`` on ``program``, resolved once per layout
+    (:func:`~framework.native.compiled_entry`): the types of those arguments are fixed by the layout (its
+    robot's box, its packed arrays) and by :func:`solve_local` itself (a float start of shape ``(n,)``, a stream,
+    the outputs it makes, :class:`LocalSettings`' plain numbers)."""
+    entries = program.layout.entries
+    entry = entries.get(kernel)
+    if entry is None:
+        entry = entries[kernel] = compiled_entry(kernel, args)
+    return entry
 
 
 def regularized_status(code: int) -> str | None:
