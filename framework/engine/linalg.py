@@ -70,11 +70,14 @@ def lu_solve(A, b, M, out) -> bool:
                 M[c, j], M[p, j] = M[p, j], M[c, j]
         inverse = 1.0 / M[c, c]
         M[c, c] = inverse  # kept for the back substitution
+        pivot_row = M[c]
+        first, end = np.uint64(c + 1), np.uint64(k + 1)  # unsigned: no negative-index wrap test, the loop vectorizes
         for i in range(c + 1, k):
-            f = M[i, c] * inverse
+            row = M[i]
+            f = row[c] * inverse
             if f != 0.0:
-                for j in range(c + 1, k + 1):
-                    M[i, j] -= f * M[c, j]
+                for j in range(first, end):
+                    row[j] -= f * pivot_row[j]
     for i in range(k - 1, -1, -1):
         s = M[i, k]
         for j in range(i + 1, k):

@@ -262,7 +262,8 @@ def _restore(x, lower, upper, box_wrap, kin, prog, near, ws, m, A, L, y, dx, Jc,
         kept = (near, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
         _, stalled = _restoring_steps(x, lower, upper, box_wrap, kin, kept, ws, mn, A, L, y, dx, Jc, steps, target,
                                       before)
-        linearize(x, TASK, kin, prog, ws, NO, COMPUTE)  # every row again, the set-aside ones included
+        linearize(x, TASK, kin, prog, ws, NO, REUSE)  # every row again, the set-aside ones included (the steps
+        # left the poses at x in ws)
         e = np.sqrt(squared_norm(ws[3], m))
         if e <= target or stalled:
             return e, False
@@ -892,7 +893,11 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
             for i in range(n):
                 xt[i] = x[i] + alpha * dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
+            if near_contact:  # the frame Jacobians only of the rows not clear at the trial (contact rows: most are)
+                linearize(xt, TASK, kin, prog, tri, NO, COMPUTE)
+                linearize(xt, TASK, kin, prog, tri, YES, JACOBIANS_FROM_POSES)
+            else:
+                linearize(xt, TASK, kin, prog, tri, YES, COMPUTE)
             entered = not unblocked and _entered(x, xt, box_wrap, hinge, cur[3], held_now, tri[3], tri[4], delta,
                                                  Jb, cb, sb)
             # backtracking without the blocking rows: to the boundary of the first row the trial entered
