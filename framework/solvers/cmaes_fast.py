@@ -159,15 +159,26 @@ def _check_covariance(C: Any, n: int) -> np.ndarray:
 
 @numba.njit(cache=True)
 def _sample(mean, sigma, B, D, z):
-    """``m + sigma B D z`` for each row ``z`` of ``z (lambda, n)``."""
+    """``m + sigma B D z`` for each row ``z`` of ``z (lambda, n)``.
+
+    Each sum ``Σ_j (B_ij D_j) z_kj`` is accumulated in ``j`` order, all ``i`` at once (the inner loop over ``i`` runs
+    along a row of ``(BD)ᵀ`` and vectorizes; the sums are the same, term by term)."""
     lam, n = z.shape
     X = np.empty((lam, n))
+    BDt = np.empty((n, n))  # (B D)ᵀ: row j holds column j of B D
+    for i in range(n):
+        for j in range(n):
+            BDt[j, i] = B[i, j] * D[j]
+    acc = np.empty(n)
     for k in range(lam):
+        acc[:] = 0.0
+        for j in range(n):
+            zk = z[k, j]
+            row = BDt[j]
+            for i in range(n):
+                acc[i] += row[i] * zk
         for i in range(n):
-            s = 0.0
-            for j in range(n):
-                s += B[i, j] * D[j] * z[k, j]
-            X[k, i] = mean[i] + sigma * s
+            X[k, i] = mean[i] + sigma * acc[i]
     return X
 
 
@@ -226,12 +237,17 @@ def _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, m
     for i in range(n):
         pc[i] = (1 - cc) * pc[i] + (kpc * y_w[i] if hsig else 0.0)
     decay = 1 - c1 - cmu + (0.0 if hsig else c1 * cc * (2 - cc))
+    S = np.zeros((n, n))  # Σ_a (w_a y_ai) y_aj, accumulated in a order, a row of j at a time (vectorizes)
+    for a in range(mu):
+        ya = y_sel[a]
+        for i in range(n):
+            wy = w[a] * ya[i]
+            row = S[i]
+            for j in range(n):
+                row[j] += wy * ya[j]
     for i in range(n):
         for j in range(n):
-            s = 0.0
-            for a in range(mu):
-                s += w[a] * y_sel[a, i] * y_sel[a, j]
-            C[i, j] = decay * C[i, j] + c1 * pc[i] * pc[j] + cmu * s
+            C[i, j] = decay * C[i, j] + c1 * pc[i] * pc[j] + cmu * S[i, j]
     new = sigma * np.exp((cs / damps) * (ps_norm / chi_n - 1))
     return min(max(new, 1e-300), max_sigma), hsig
 
