@@ -88,3 +88,49 @@ def test_trust_region_step_is_the_models_minimum_on_the_ball(rng, kind):
         if kind == "saddle":
             assert np.linalg.norm(p) == pytest.approx(radius, rel=1e-9)
             assert decrease == pytest.approx(-0.5 * w.min() * radius**2, rel=1e-9)
+
+
+def test_carved_views_are_the_buffers_entries_and_tangent_views_tile_their_size():
+    """``carve`` gives C-contiguous views of a flat buffer (writes land where numpy's slicing says); the Newton
+    phase's tangent scratch, carved from one buffer, tiles exactly ``tangent_size`` entries without overlap."""
+    import numba
+
+    from framework.engine.newton import tangent_size, tangent_views
+    from framework.native import carve
+
+    @numba.njit
+    def fill(buffer, start, rows, cols):
+        view = carve(buffer, start, (rows, cols))
+        for i in range(rows):
+            for j in range(cols):
+                view[i, j] = 100 * i + j
+        return carve(buffer, start + rows * cols, 3)
+
+    buffer = np.zeros(40)
+    tail = fill(buffer, 5, 3, 4)
+    expected = np.zeros(40)
+    expected[5:17] = (100 * np.arange(3)[:, None] + np.arange(4)).ravel()
+    np.testing.assert_array_equal(buffer, expected)
+    assert tail.shape == (3,) and tail.flags.c_contiguous
+    tail[:] = -1.0  # a view: the buffer sees it
+    np.testing.assert_array_equal(buffer[17:20], -1.0)
+
+    @numba.njit
+    def bump(v):
+        flat = v.reshape(v.size)
+        for i in range(flat.size):
+            flat[i] += 1.0
+        return 1
+
+    @numba.njit
+    def mark(buffer, start, n, rows):
+        v = tangent_views(buffer, start, n, rows)
+        return (bump(v[0]) + bump(v[1]) + bump(v[2]) + bump(v[3]) + bump(v[4]) + bump(v[5]) + bump(v[6])
+                + bump(v[7]) + bump(v[8]) + bump(v[9]) + bump(v[10]) + bump(v[11]) + bump(v[12]) + bump(v[13])
+                + bump(v[14]) + bump(v[15]) + bump(v[16]) + bump(v[17]) + bump(v[18]))
+
+    n, rows, start = 5, 3, 7
+    buffer = np.zeros(start + tangent_size(n, rows) + 4)
+    assert mark(buffer, start, n, rows) == 19
+    np.testing.assert_array_equal(buffer[start:start + tangent_size(n, rows)], 1.0)  # each entry in one view
+    assert not buffer[:start].any() and not buffer[start + tangent_size(n, rows):].any()

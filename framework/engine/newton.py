@@ -79,7 +79,7 @@ from ..costs.kernels import (
     term_values,
     workspace,
 )
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, matrix, square
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, carve, keep_alive, matrix, square
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve, null_space, symmetric_eigen, trust_region_step
 from .reach import bounded_step, held, project, rows_of, squared_norm
@@ -515,13 +515,31 @@ def _kick_due(prog, first, state, lam, m) -> bool:
     return False
 
 
+@numba.njit(cache=True, inline="always")
+def tangent_size(n: int, rows: int) -> int:
+    """Entries of :func:`_tangent_step`'s scratch for ``n`` coordinates and up to ``rows`` active rows."""
+    return 2 * n * rows + 3 * rows + 6 * n * n + 6 * n + 2 * rows * rows
+
+
 @numba.njit(cache=True)
-def tangent_scratch(n: int, rows: int) -> tuple:
-    """Scratch of :func:`_tangent_step` for ``n`` coordinates and up to ``rows`` active rows."""
-    return (np.empty((n, rows)), np.empty((n, rows)), np.empty(rows), np.empty((n, n)), np.empty((n, n)),
-            np.empty(n * n), np.empty(n * n), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n),
-            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(rows * rows), np.empty(rows * rows),
-            np.empty(rows), np.empty(rows))
+def tangent_views(buffer, start: int, n: int, rows: int) -> tuple:
+    """Scratch of :func:`_tangent_step` for ``n`` coordinates and up to ``rows`` active rows: views of ``buffer``
+    from entry ``start`` on (:func:`tangent_size` entries)."""
+    a, nn, rr = start, n * n, rows * rows
+    return (carve(buffer, a, (n, rows)), carve(buffer, a + n * rows, (n, rows)), carve(buffer, a + 2 * n * rows, rows),
+            carve(buffer, a + 2 * n * rows + rows, (n, n)), carve(buffer, a + 2 * n * rows + rows + nn, (n, n)),
+            carve(buffer, a + 2 * n * rows + rows + 2 * nn, nn), carve(buffer, a + 2 * n * rows + rows + 3 * nn, nn),
+            carve(buffer, a + 2 * n * rows + rows + 4 * nn, (n, n)),
+            carve(buffer, a + 2 * n * rows + rows + 5 * nn, (n, n)),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn, n), carve(buffer, a + 2 * n * rows + rows + 6 * nn + n, n),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 2 * n, n),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 3 * n, n),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 4 * n, n),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 5 * n, n),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 6 * n, rr),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 6 * n + rr, rr),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 6 * n + 2 * rr, rows),
+            carve(buffer, a + 2 * n * rows + rows + 6 * nn + 6 * n + 2 * rr + rows, rows))
 
 
 @numba.njit(cache=True, inline="always")
@@ -647,49 +665,67 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
     big = _max_rows(prog)
     mq = m + q  # task rows, then regularizer rows (held at zero) in the active set
-    own = (np.empty(q), np.zeros((q, n)), np.empty(q), np.zeros((q, n)), np.empty(n), np.empty((n, n)),
-           np.empty((mq, mq)), np.empty((mq, mq)), np.empty(max(mq, n)), np.empty(n), np.zeros(mq), np.zeros(mq),
-           np.empty(n), np.empty(n, dtype=np.int64), np.empty((n + mq) ** 2), np.empty((n + mq) * (n + mq + 1)),
-           np.empty(n + mq), np.empty(n + mq), np.empty(n), np.empty(n), np.empty(big), np.empty((big, big)),
-           np.empty(big), np.empty((n, n)), np.empty((m, n)), np.empty(mq, dtype=np.int64), np.empty((mq, n)),
-           np.zeros(mq), np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_), np.zeros((m, n)), np.zeros(m),
-           np.zeros(m), np.empty(n))
-    own_tangent = tangent_scratch(n, mq)
-    tangent = (borrow(own_tangent[0]), borrow(own_tangent[1]), borrow(own_tangent[2]), borrow(own_tangent[3]),
-               borrow(own_tangent[4]), borrow(own_tangent[5]), borrow(own_tangent[6]), borrow(own_tangent[7]),
-               borrow(own_tangent[8]), borrow(own_tangent[9]), borrow(own_tangent[10]), borrow(own_tangent[11]),
-               borrow(own_tangent[12]), borrow(own_tangent[13]), borrow(own_tangent[14]), borrow(own_tangent[15]),
-               borrow(own_tangent[16]), borrow(own_tangent[17]), borrow(own_tangent[18]))
     nb = prog[0].shape[0]
-    own_near = prog[0].copy()  # the restoring steps' block table (one-sided blocks clear at their start set aside)
-    near = borrow(own_near)
     # the contact rows near x (the blocks with their margins widened by BAND; their rows rn, Jn at x once
     # band_at_x): made only with contact rows
     near_contact, band_at_x = contact.any(), False
     ws_rows = own_cur[3].shape[0] if near_contact else 0
-    own_band = (np.empty(prog[2].shape[0] if near_contact else 0), np.empty(ws_rows), np.zeros((ws_rows, n)))
-    if near_contact:
-        widen_margins(prog[0], prog[2], BAND, own_band[0])
-    band_prog = (prog[0], prog[1], borrow(own_band[0]), prog[3], prog[4], prog[5], prog[6])
-    rn, Jn = borrow(own_band[1]), borrow(own_band[2])
-    first, state = np.empty(nb, dtype=np.int64), np.zeros(nb, dtype=np.int8)  # regularizers' rows and states
-    target = np.zeros(q)  # kicked norms' aims
-    _regularizer_rows(prog, first)
-    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
-    cur_r = (cur[0], cur[1], cur[2], borrow(own[0]), borrow(own[1]), cur[5], cur[6])
-    tri_r = (tri[0], tri[1], tri[2], borrow(own[2]), borrow(own[3]), tri[5], tri[6])
-    g, H, Am, Lm, ym, dxm = borrow(own[4]), borrow(own[5]), borrow(own[6]), borrow(own[7]), borrow(own[8]), \
-        borrow(own[9])
-    lam, lam_neg, gl, fidx = borrow(own[10]), borrow(own[11]), borrow(own[12]), borrow(own[13])
-    K, M, rhs, sol, xt, dx = borrow(own[14]), borrow(own[15]), borrow(own[16]), borrow(own[17]), \
-        borrow(own[18]), borrow(own[19])
-    gr, Hr, mu_r, Hlb, Jc = borrow(own[20]), borrow(own[21]), borrow(own[22]), borrow(own[23]), borrow(own[24])
-    arow, Aa, lam_a = borrow(own[25]), borrow(own[26]), borrow(own[27])
+    band_params = prog[2].shape[0] if near_contact else 0
+    # the scratch arrays, carved from one allocation per type, the zeroed ones first (some sixty allocations cost
+    # ~5 µs, as much as a Newton iteration)
+    zeroed = 2 * q * n + 3 * mq + m * n + 2 * m + q + n + ws_rows * n
+    rest = 2 * q + 8 * n + 2 * n * n + 2 * mq * mq + max(mq, n) + 2 * (n + mq) + 2 * big + big * big + m * n \
+        + mq * n + band_params + ws_rows
+    kkt = (n + mq) ** 2 + (n + mq) * (n + mq + 1)
+    own = np.empty(zeroed + rest + tangent_size(n, mq) + kkt)
+    own[:zeroed] = 0.0
+    own_ints, own_flags = np.empty(n + mq + nb, dtype=np.int64), np.zeros(2 * m + n, dtype=np.bool_)
+    state = np.zeros(nb, dtype=np.int8)  # the regularizers' states
+    Jr_cur, Jr_tri = carve(own, 0, (q, n)), carve(own, q * n, (q, n))  # (zeroed)
+    a = 2 * q * n
+    lam, lam_neg, lam_a = carve(own, a, mq), carve(own, a + mq, mq), carve(own, a + 2 * mq, mq)
+    a += 3 * mq
     # blocking rows: one-sided rows clear at x (no Jacobian there) that the last trial step entered, held with
     # their linearization at that trial (``Jb`` rows, value at x ``cb``, violated side ``sb``) until they are
     # active at x with a Jacobian of their own, or their multiplier lets them go
-    held_now, blocking, Jb, cb, sb, delta = borrow(own[28]), borrow(own[29]), borrow(own[30]), borrow(own[31]), \
-        borrow(own[32]), borrow(own[33])
+    Jb, cb, sb = carve(own, a, (m, n)), carve(own, a + m * n, m), carve(own, a + m * n + m, m)
+    a += m * n + 2 * m
+    target = carve(own, a, q)  # kicked norms' aims
+    shift = carve(own, a + q, n)  # coordinates the last step at x carried through a bound: their moves onto it
+    Jn = carve(own, a + q + n, (ws_rows, n))
+    a += q + n + ws_rows * n  # (= zeroed)
+    r_cur, r_tri, g, xt, dx, gl = carve(own, a, q), carve(own, a + q, q), carve(own, a + 2 * q, n), \
+        carve(own, a + 2 * q + n, n), carve(own, a + 2 * q + 2 * n, n), carve(own, a + 2 * q + 3 * n, n)
+    a += 2 * q + 4 * n
+    delta, gs, before, dxm = carve(own, a, n), carve(own, a + n, n), carve(own, a + 2 * n, n), \
+        carve(own, a + 3 * n, n)
+    a += 4 * n
+    H, Hlb = carve(own, a, (n, n)), carve(own, a + n * n, (n, n))
+    a += 2 * n * n
+    Am, Lm, ym = carve(own, a, (mq, mq)), carve(own, a + mq * mq, (mq, mq)), carve(own, a + 2 * mq * mq, max(mq, n))
+    a += 2 * mq * mq + max(mq, n)
+    rhs, sol = carve(own, a, n + mq), carve(own, a + n + mq, n + mq)
+    a += 2 * (n + mq)
+    gr, mu_r, Hr = carve(own, a, big), carve(own, a + big, big), carve(own, a + 2 * big, (big, big))
+    a += 2 * big + big * big
+    Jc, Aa = carve(own, a, (m, n)), carve(own, a + m * n, (mq, n))
+    a += m * n + mq * n
+    band_margins, rn = carve(own, a, band_params), carve(own, a + band_params, ws_rows)
+    a += band_params + ws_rows
+    tangent = tangent_views(own, a, n, mq)
+    a += tangent_size(n, mq)
+    K, M = carve(own, a, (n + mq) ** 2), carve(own, a + (n + mq) ** 2, (n + mq) * (n + mq + 1))
+    fidx, arow, first = carve(own_ints, 0, n), carve(own_ints, n, mq), carve(own_ints, n + mq, nb)
+    held_now, blocking, pinned = carve(own_flags, 0, m), carve(own_flags, m, m), carve(own_flags, 2 * m, n)
+    own_near = prog[0].copy()  # the restoring steps' block table (one-sided blocks clear at their start set aside)
+    near = borrow(own_near)
+    if near_contact:
+        widen_margins(prog[0], prog[2], BAND, band_margins)
+    band_prog = (prog[0], prog[1], band_margins, prog[3], prog[4], prog[5], prog[6])
+    _regularizer_rows(prog, first)
+    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
+    cur_r = (cur[0], cur[1], cur[2], r_cur, Jr_cur, cur[5], cur[6])
+    tri_r = (tri[0], tri[1], tri[2], r_tri, Jr_tri, tri[5], tri[6])
     linearize(x, TASK, kin, prog, cur, YES, COMPUTE)
     linearize(x, REGULARIZERS, kin, prog, cur_r, YES, REUSE)
     evaluations = 1
@@ -704,9 +740,6 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     status, iterations, accepted = ITERATIONS, 0, 0
     bint, bflt = prog[0], prog[1]
     unblocked, failed, redundant = False, 0, False
-    pinned = np.zeros(n, dtype=np.bool_)  # coordinates the last step at x carried through a bound: moved onto it
-    shift, gs = np.zeros(n), np.empty(n)  # (their moves, and the gradient g + H shift the others see)
-    before = np.empty(n)  # a restoring step's start
     while iterations < max_iterations:
         if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
             status = DEADLINE
@@ -981,7 +1014,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri, own, own_tangent, own_near, own_band)
+    keep_alive(own_cur, own_tri, own, own_ints, own_flags, state, own_near)
     return status
 
 
