@@ -101,9 +101,10 @@ class IKResult:
                   collisions: CollisionReport | None, source: tuple) -> IKResult:
         """A result whose tables are made on first read from ``source``: ``(program, term values (list, term
         order), task block errors (list, block order), history or None)``."""
-        made = cls(configuration, cost, None, None, success, stop_reason, iterations, evaluations, wall_time, None,
-                   solver, settings, state, None, collisions)
-        made._source = source
+        made = object.__new__(cls)  # (the slots set here: __init__'s defaults cost a call per solve)
+        made.configuration, made.cost, made.success, made.stop_reason = configuration, cost, success, stop_reason
+        made.iterations, made.evaluations, made.wall_time, made.solver = iterations, evaluations, wall_time, solver
+        made.settings, made.state, made.collisions, made._source = settings, state, collisions, source
         return made
 
     def _make(self) -> None:
@@ -211,18 +212,18 @@ def make_request(
     population = positive_int(population, "population", maximum=MAX_POPULATION)
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
-    return Request(
-        rng=_lazy_generator(seed),
-        seed=int(seed.integers(0, 2**63)) if isinstance(seed, np.random.Generator) else int(seed),
-        tolerance=float(tolerance),
-        angle_tolerance=float(tolerance if angle_tolerance is None else angle_tolerance),
-        max_iterations=max_iterations,
-        population=population,
-        initial=initial,
-        deadline=deadline,
-        stop_at_tolerance=stop_at_tolerance,
-        callback=callback,
-        progress=progress,
+    return Request(  # (positionally: a named tuple's keywords cost 0.5 µs per solve)
+        _lazy_generator(seed),  # rng
+        int(seed.integers(0, 2**63)) if isinstance(seed, np.random.Generator) else int(seed),  # seed
+        float(tolerance),
+        float(tolerance if angle_tolerance is None else angle_tolerance),
+        max_iterations,
+        population,
+        initial,
+        deadline,
+        stop_at_tolerance,
+        callback,
+        progress,
     )
 
 

@@ -99,6 +99,10 @@ class Hybrid(IKSolver):
     def __init__(self, options=None):
         super().__init__(options)
         self.static_settings = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
+        # what every report holds, in its order (a solve copies it and sets its own entries: cheaper than a merge)
+        self._blank_report = {**self.static_settings, "start": None, "max_iterations": None, "escalated": False,
+                              "restart_count": 0, "regularized": None, "weighted": False, "hull_runs": 0,
+                              "on_hulls": False, "clear_first": False, "population": None}
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
@@ -129,9 +133,9 @@ class Hybrid(IKSolver):
             opening = solve_local(problem.program, x0, draws, first, deadline=request.deadline)
             if opening.reached and (problem.priorities  # (no multipliers: optimal, nothing was regularized)
                                     or reaching_is_optimal(problem.program, opening.x, opening.multipliers)):
-                return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,
-                               self._report(start, budget, opening.restarts, opening.regularized, request),
-                               task_errors=opening.task_errors, values=opening.values)
+                return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,  # (positional:
+                               self._report(start, budget, opening.restarts, opening.regularized, request),  # cheaper)
+                               {}, opening.task_errors, opening.values)
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
 
     def clears_first(self, problem) -> bool:
@@ -144,10 +148,13 @@ class Hybrid(IKSolver):
                 escalated: bool = False, weighted: bool = False, hull_runs: int = 0, on_hulls: bool = False,
                 clear_first: bool = False) -> dict[str, Any]:
         """The settings a result reports: the options and how the solve went."""
-        return {**self.static_settings, "start": start, "max_iterations": budget, "escalated": escalated,
-                "restart_count": restarts, "regularized": regularized, "weighted": weighted,
-                "hull_runs": hull_runs, "on_hulls": on_hulls, "clear_first": clear_first,
-                "population": request.population}
+        report = self._blank_report.copy()
+        report["start"], report["max_iterations"], report["restart_count"] = start, budget, restarts
+        report["regularized"], report["population"] = regularized, request.population
+        if escalated or weighted or hull_runs or on_hulls or clear_first:
+            report.update(escalated=escalated, weighted=weighted, hull_runs=hull_runs, on_hulls=on_hulls,
+                          clear_first=clear_first)
+        return report
 
     def _search(self, problem, request: Request, x0: np.ndarray, start: str, budget: int, settings: LocalSettings,
                 first: LocalSettings, draws: np.ndarray, opening: LocalResult | None) -> Outcome:
