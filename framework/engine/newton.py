@@ -697,6 +697,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     r_cur, r_tri, g, xt, dx, gl = carve(own, a, q), carve(own, a + q, q), carve(own, a + 2 * q, n), \
         carve(own, a + 2 * q + n, n), carve(own, a + 2 * q + 2 * n, n), carve(own, a + 2 * q + 3 * n, n)
     a += 2 * q + 4 * n
+    # (gs: the gradient g + H shift the free coordinates see; before: a restoring step's start)
     delta, gs, before, dxm = carve(own, a, n), carve(own, a + n, n), carve(own, a + 2 * n, n), \
         carve(own, a + 3 * n, n)
     a += 4 * n
@@ -715,7 +716,9 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     tangent = tangent_views(own, a, n, mq)
     a += tangent_size(n, mq)
     K, M = carve(own, a, (n + mq) ** 2), carve(own, a + (n + mq) ** 2, (n + mq) * (n + mq + 1))
+    assert a + kkt == own.size  # the views above tile the allocation whose size the sums before them give
     fidx, arow, first = carve(own_ints, 0, n), carve(own_ints, n, mq), carve(own_ints, n + mq, nb)
+    # (pinned: the coordinates the last step at x carried through a bound, moved onto it by shift)
     held_now, blocking, pinned = carve(own_flags, 0, m), carve(own_flags, m, m), carve(own_flags, 2 * m, n)
     own_near = prog[0].copy()  # the restoring steps' block table (one-sided blocks clear at their start set aside)
     near = borrow(own_near)

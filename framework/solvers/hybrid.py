@@ -98,11 +98,11 @@ class Hybrid(IKSolver):
 
     def __init__(self, options=None):
         super().__init__(options)
-        self.static_settings = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
-        # what every report holds, in its order (a solve copies it and sets its own entries: cheaper than a merge)
-        self._blank_report = {**self.static_settings, "start": None, "max_iterations": None, "escalated": False,
-                              "restart_count": 0, "regularized": None, "weighted": False, "hull_runs": 0,
-                              "on_hulls": False, "clear_first": False, "population": None}
+        # what every report holds, in its order: the options, then how the solve went (a solve copies it and sets
+        # its own entries: cheaper than a merge)
+        self._blank_report = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
+        self._blank_report.update(start=None, max_iterations=None, escalated=False, restart_count=0, regularized=None,
+                                  weighted=False, hull_runs=0, on_hulls=False, clear_first=False, population=None)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
