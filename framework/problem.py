@@ -79,25 +79,27 @@ class Problem:
     program: Program = field(init=False, repr=False)
     checks_collisions: bool = field(init=False, repr=False)
 
-    def __post_init__(self) -> None:
-        objective = Objective.of(self.objective)
-        if not objective.terms:
+    def __init__(self, robot: Robot, objective, bounds: str = "resample", priorities: bool = True) -> None:
+        # (written out, not the dataclass's: a pose solve's Python is most of its time; one update sets the fields)
+        objective = Objective.of(objective)
+        terms = objective.terms
+        if not terms:
             raise TaskError("a problem needs an objective of at least one cost term")
-        if self.bounds not in BOUNDS:
-            raise TaskError(f"bounds handling must be one of {BOUNDS}; got {self.bounds!r}")
-        if not isinstance(self.priorities, bool):
-            raise TaskError(f"priorities must be true or false; got {self.priorities!r}")
-        if self.bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in objective.terms):
+        if bounds != "resample" and bounds not in BOUNDS:
+            raise TaskError(f"bounds handling must be one of {BOUNDS}; got {bounds!r}")
+        if priorities is not True and not isinstance(priorities, bool):
+            raise TaskError(f"priorities must be true or false; got {priorities!r}")
+        if bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in terms):
             from .costs import JointLimitPenalty
 
             objective = objective + JointLimitPenalty()
+            terms = objective.terms
         checks = False
-        for _, term in objective.terms:
-            term.validate(self.robot)
+        for _, term in terms:
+            term.validate(robot)
             checks = checks or term.checks_collisions
-        object.__setattr__(self, "objective", objective)
-        object.__setattr__(self, "checks_collisions", checks)
-        object.__setattr__(self, "program", Program(self.robot, objective))
+        self.__dict__.update(robot=robot, objective=objective, bounds=bounds, priorities=priorities,
+                             checks_collisions=checks, program=Program(robot, objective))
 
     @property
     def n(self) -> int:

@@ -174,12 +174,10 @@ def solve(
             hybrid); returning True stops. Recordings use it to trace every term.
     """
     start = time.perf_counter()
-    request = make_request(problem, seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance,
-                           time_budget=time_budget, max_iterations=max_iterations, population=population,
-                           initial=initial, stop_at_tolerance=stop_at_tolerance, callback=callback, progress=progress)
+    request = _request(problem, seed, tolerance, angle_tolerance, time_budget, max_iterations, population, initial,
+                       stop_at_tolerance, callback, progress)
     method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
-    outcome = method.solve(problem, request)
-    return result_of(problem, outcome, method.name, request, start)
+    return result_of(problem, method.solve(problem, request), method.name, request, start)
 
 
 def make_request(
@@ -198,33 +196,50 @@ def make_request(
 ) -> Request:
     """The validated :class:`~framework.solvers.Request` of :func:`solve`'s arguments (the time budget's
     deadline counts from now); bad values raise :class:`SolverError` naming them."""
-    deadline = None
-    if time_budget is not None:
-        if not _positive(time_budget):
-            raise SolverError(f"time_budget must be a positive number of seconds; got {time_budget!r}")
+    return _request(problem, seed, tolerance, angle_tolerance, time_budget, max_iterations, population, initial,
+                    stop_at_tolerance, callback, progress)
+
+
+def _request(problem: Problem, seed, tolerance, angle_tolerance, time_budget, max_iterations, population, initial,
+             stop_at_tolerance, callback, progress) -> Request:
+    """:func:`make_request` with its arguments in order (a solve's Python is most of a pose solve's time: the
+    common cases are tested first, each check once)."""
+    if time_budget is None:
+        deadline = None
+    elif type(time_budget) is float and 0.0 < time_budget < math.inf:
+        deadline = time.monotonic() + time_budget
+    elif _positive(time_budget):
         deadline = time.monotonic() + float(time_budget)
-    if not _positive(tolerance):
-        raise SolverError(f"tolerance must be a positive number; got {tolerance!r}")
-    if angle_tolerance is not None and not _positive(angle_tolerance):
+    else:
+        raise SolverError(f"time_budget must be a positive number of seconds; got {time_budget!r}")
+    if not (type(tolerance) is float and 0.0 < tolerance < math.inf):
+        if not _positive(tolerance):
+            raise SolverError(f"tolerance must be a positive number; got {tolerance!r}")
+        tolerance = float(tolerance)
+    if angle_tolerance is None:
+        angle_tolerance = tolerance
+    elif _positive(angle_tolerance):
+        angle_tolerance = float(angle_tolerance)
+    else:
         raise SolverError(f"angle_tolerance must be a positive number [rad]; got {angle_tolerance!r}")
     if max_iterations is not None:
         max_iterations = positive_int(max_iterations, "max_iterations")
-    population = positive_int(population, "population", maximum=MAX_POPULATION)
+    if not (type(population) is int and 0 < population <= MAX_POPULATION):
+        population = positive_int(population, "population", maximum=MAX_POPULATION)
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
-    return Request(  # (positionally: a named tuple's keywords cost 0.5 µs per solve)
-        _lazy_generator(seed),  # rng
-        int(seed.integers(0, 2**63)) if isinstance(seed, np.random.Generator) else int(seed),  # seed
-        float(tolerance),
-        float(tolerance if angle_tolerance is None else angle_tolerance),
-        max_iterations,
-        population,
-        initial,
-        deadline,
-        stop_at_tolerance,
-        callback,
-        progress,
-    )
+    if type(seed) is int and seed >= 0:  # the common case
+        rng = _LazyGenerator(seed)
+    elif isinstance(seed, np.random.Generator):
+        rng, seed = _given(seed), int(seed.integers(0, 2**63))
+    elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0:
+        seed = int(seed)
+        rng = _LazyGenerator(seed)
+    else:
+        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
+    # (positionally: a named tuple's keywords cost 0.5 µs per solve)
+    return Request(rng, seed, tolerance, angle_tolerance, max_iterations, population, initial, deadline,
+                   stop_at_tolerance, callback, progress)
 
 
 def _positive(value: Any) -> bool:
@@ -234,45 +249,47 @@ def _positive(value: Any) -> bool:
         and math.isfinite(value) and value > 0
 
 
-def _lazy_generator(seed: int | np.random.Generator) -> Callable[[], np.random.Generator]:
-    """A callable returning the generator of ``seed``, created on the first call (a seed costs ~9 µs)."""
-    if isinstance(seed, np.random.Generator):
-        return lambda: seed
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
-    made: list[np.random.Generator] = []
+def _given(generator: np.random.Generator) -> Callable[[], np.random.Generator]:
+    return lambda: generator
 
-    def generator() -> np.random.Generator:
-        if not made:
-            made.append(np.random.default_rng(int(seed)))
-        return made[0]
 
-    return generator
+class _LazyGenerator:
+    """The generator of an integer seed, created on the first call (a seed costs ~9 µs: most solves need none)."""
+
+    __slots__ = ("seed", "made")
+
+    def __init__(self, seed: int) -> None:
+        self.seed, self.made = seed, None
+
+    def __call__(self) -> np.random.Generator:
+        if self.made is None:
+            self.made = np.random.default_rng(self.seed)
+        return self.made
 
 
 def result_of(problem: Problem, outcome, solver: str, request: Request, start: float) -> IKResult:
     """The :class:`IKResult` of a solver's :class:`~framework.solvers.Outcome` for ``request`` (success: every task
     block within its tolerance and, with collision terms, no contact by the exact check); ``start``: the
     ``time.perf_counter()`` its wall time counts from."""
-    x = np.array(outcome.x, dtype=float)
+    x, stop, iterations, evaluations, history, settings, state, errors, values, collisions = outcome
+    x = np.array(x, dtype=float)
     program = problem.program
-    values = program.values(x[None])[0] if outcome.values is None else outcome.values
+    if values is None:
+        values = program.values(x[None])[0]
     value_list = values.tolist()
     cost = 0.0
     for w, v in zip(program.weight_list, value_list):
         cost += w * v
-    errors = outcome.task_errors
     if errors is None:
         errors = program.task_errors(x)
     error_list = errors.tolist()
     # an interrupted solve is never a success, whatever its last point (the user stopped it before its end);
     # with collision terms the exact check has the last word, not their sphere rows
-    collisions = outcome.collisions
     if collisions is None and problem.checks_collisions:
         collisions = problem.collisions(x)
-    success = outcome.stop_reason != "interrupted" and program.within(
+    success = stop != "interrupted" and program.within(
         error_list, request.tolerance, request.angle_tolerance, exact_checked=collisions is not None) \
         and (collisions is None or not collisions.colliding)
-    return IKResult._of_solve(x, cost, success, outcome.stop_reason, int(outcome.iterations),
-                              int(outcome.evaluations), time.perf_counter() - start, solver, outcome.settings,
-                              outcome.state, collisions, (program, value_list, error_list, outcome.history))
+    return IKResult._of_solve(x, cost, success, stop, int(iterations), int(evaluations),
+                              time.perf_counter() - start, solver, settings, state, collisions,
+                              (program, value_list, error_list, history))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from functools import cached_property
+from operator import attrgetter
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -23,6 +24,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..hulls import HullPair
     from .base import Objective, Term
 
+_VERSION = attrgetter("version")
+_FLOAT = np.dtype(float)
 _LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_REGULARIZER}
 
 
@@ -174,6 +177,15 @@ class _Layout:
         #: ``int64 (r,)`` twice: the parameters that hold the regularizers' reference configuration, and the
         #: coordinates each holds (``params[slots] = x[coordinates]`` moves the reference to ``x``)
         self.reference_slots = self.references_of(range(len(terms)))
+        #: the parts of a program's ``prog`` after its parameters, and the attributes every program of this layout
+        #: has (:class:`Program` copies them in one update)
+        self.prog_tail = (self.idx, self.wrap, *self.chains)
+        self.shared = {
+            "frames": self.frames, "kin": self.kin, "wrap": self.wrap, "task_tolerances": self.task_tolerances,
+            "task_block_rows": self.task_block_rows, "task_angular": self.task_angular,
+            "task_checked_exactly": self.task_checked_exactly, "task_rows": self.task_rows,
+            "task_blocks": self.task_blocks, "term_kinds": self.term_kinds,
+            "has_regularizers": B.LEVEL_REGULARIZER in self.levels_present}
 
     def references_of(self, terms: Iterable[int]) -> tuple[np.ndarray, np.ndarray]:
         """:attr:`reference_slots` of the terms ``terms`` (indices in objective order) alone."""
@@ -207,24 +219,33 @@ class Program:
     """
 
     def __init__(self, robot: Robot, objective: Objective):
-        self.robot = robot
-        weights, terms = zip(*objective.terms) if objective.terms else ((), ())  # floats (``Objective`` checked)
-        self.terms: tuple[Term, ...] = terms
-        self.weight_list: tuple[float, ...] = weights
-        key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
-        layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
-        self.layout = layout
-        self.frames, self.kin, self.wrap = layout.frames, layout.kin, layout.wrap
-        flat = [terms[k].parameters(robot) for k in layout.packed_terms]
-        params = np.array(flat[0], dtype=float) if len(flat) == 1 else \
-            np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)  # (one term: a copy)
-        self.prog = (layout.bint, layout.bflt(weights), params, layout.idx, layout.wrap, *layout.chains)
-        self.task_tolerances, self.task_block_rows = layout.task_tolerances, layout.task_block_rows
-        self.task_angular, self.task_checked_exactly = layout.task_angular, layout.task_checked_exactly
-        self.task_rows, self.task_blocks = layout.task_rows, layout.task_blocks
-        self.term_kinds = layout.term_kinds
-        self.has_regularizers = B.LEVEL_REGULARIZER in layout.levels_present
-        self._versions = [t.version for t in self.terms]
+        pairs = objective.terms
+        if len(pairs) == 1:  # (the common case: no zip, no comprehension frames)
+            (weight, term), = pairs
+            weights, terms = (weight,), (term,)
+            key = ("layout", ((term.level, term.name, (type(term), term.frames) if term.fixed_layout
+                               else term.layout_key(robot)),))
+        else:
+            weights, terms = zip(*pairs) if pairs else ((), ())  # floats (``Objective`` checked)
+            key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
+        layout = robot._cache.get(key)  # (robot.memo, without its call when the layout is made)
+        if layout is None:
+            layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
+        packed = layout.packed_terms
+        if len(packed) == 1:  # a copy: the program's own
+            params = terms[packed[0]].parameters(robot)
+            params = params.copy() if type(params) is np.ndarray and params.dtype == _FLOAT else \
+                np.array(params, dtype=float)
+        else:
+            flat = [terms[k].parameters(robot) for k in packed]
+            params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
+        table = layout._bflt.get(weights)
+        if table is None:
+            table = layout.bflt(weights)
+        self.__dict__.update(layout.shared)  # what every program of the layout reads from it (see _Layout.shared)
+        self.robot, self.terms, self.weight_list, self.layout = robot, terms, weights, layout
+        self.prog = (layout.bint, table, params, *layout.prog_tail)
+        self._versions = [term.version] if len(terms) == 1 else list(map(_VERSION, terms))
 
     @cached_property
     def weights(self) -> np.ndarray:

@@ -20,16 +20,19 @@ _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
 _MIX2 = np.uint64(0x94D049BB133111EB)
 _S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
 _UNIT = 2.0**-53
+_STATE = np.dtype(np.uint64)
 
 
 def stream(seed: int | np.random.Generator) -> np.ndarray:
     """A new stream ``uint64 (1,)`` from an integer seed ``>= 0`` (or one integer drawn from a generator)."""
-    if not (type(seed) is int and seed >= 0):  # the common case needs no check
-        if isinstance(seed, np.random.Generator):
-            seed = int(seed.integers(0, 2**63))
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
-    state = np.empty(1, dtype=np.uint64)  # (a list would cost a conversion)
+    state = np.empty(1, _STATE)  # (a list would cost a conversion)
+    if type(seed) is int and 0 <= seed < 2**64:  # the common case needs no check
+        state[0] = seed
+        return state
+    if isinstance(seed, np.random.Generator):
+        seed = int(seed.integers(0, 2**63))
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
     state[0] = int(seed) % 2**64
     return state
 

@@ -80,6 +80,8 @@ class LocalSettings:
             object.__setattr__(self, name, int(getattr(self, name)))
         object.__setattr__(self, "restarts", bool(self.restarts))
         object.__setattr__(self, "regularize", bool(self.regularize))
+        # reach's settings arguments in its order (made once: solve_local passes them on every call)
+        object.__setattr__(self, "_reach", (self.tolerance, self.angular, self.max_iterations, self.stall))
 
     @property
     def angular(self) -> float:
@@ -88,7 +90,7 @@ class LocalSettings:
     @property
     def max_restarts(self) -> int:
         """Random restarts a descent may take: as many as its iteration and time budgets allow, or none."""
-        return 2**62 if self.restarts else 0
+        return _RESTARTS if self.restarts else 0
 
 
 class LocalResult(NamedTuple):
@@ -148,15 +150,17 @@ def solve_local(
         deadline: ``time.monotonic()`` at which to stop (overrides ``settings.time_budget``).
     """
     program.refresh()
-    lower, upper, box_wrap = search_box(program)
-    n = program.robot.n
-    if not isinstance(rng, np.ndarray):
+    layout = program.layout
+    lower, upper, box_wrap = program.robot.lower, program.robot.upper, layout.box_wrap
+    n = lower.shape[0]
+    if type(rng) is not np.ndarray:
         rng = stream(rng)
-    elif rng.dtype != np.uint64 or rng.shape != (1,) or not rng.flags.writeable:
+    elif (rng.dtype is not _STREAM and rng.dtype != _STREAM) or rng.shape != (1,) or not rng.flags.writeable:
         raise SolverError(f"local engine: a restart stream is a writeable uint64 array of shape (1,) (see "
                           f"framework.engine.draws.stream); got {rng.dtype} {rng.shape}")
     drawn = x0 is None
-    if drawn and not program.task_rows:  # no descent to draw it
+    task_rows = program.task_rows
+    if drawn and not task_rows:  # no descent to draw it
         x = draws(rng, lower, upper, 1)[0]
     else:
         x = np.empty(n) if drawn else np.array(x0, dtype=float)
@@ -164,33 +168,38 @@ def solve_local(
             raise SolverError(f"local engine: the start must be {n} joint coordinates; got shape {x.shape}")
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
-    deadline_ns = _nanoseconds(deadline)
-    stats = np.zeros(3, dtype=np.int64)
-    errors = np.empty(program.task_block_rows.size)
+    deadline_ns = 0 if deadline is None else int(deadline * 1e9)  # (as _nanoseconds: a call less per solve)
+    stats = np.zeros(3, _COUNTS)
+    errors = np.empty(layout.task_tolerances.size)
     values = np.zeros(len(program.terms))
     code = REACHED
-    if program.task_rows:
-        args = (x, drawn, settings.max_restarts, rng, lower, upper, box_wrap, program.kin, program.prog,
-                settings.tolerance, settings.angular, settings.max_iterations, settings.stall, deadline_ns,
-                settings.polish, errors, values, stats)
-        code = _entry(program, reach, args)(*args)
+    if task_rows:
+        args = (x, drawn, _RESTARTS if settings.restarts else 0, rng, lower, upper, box_wrap, program.kin,
+                program.prog, *settings._reach, deadline_ns, settings.polish, errors, values, stats)
+        entry = layout.entries.get(reach)
+        code = (entry or _entry(program, reach, args))(*args)
     iterations, evaluations, restarts = stats.tolist()
     reached = code == REACHED
     regularized = multipliers = None
     if reached and settings.regularize and program.has_regularizers:
-        multipliers = np.zeros(program.task_rows)
+        multipliers = np.zeros(task_rows)
         args = (x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
                 settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
         code = _entry(program, newton.regularize, args)(*args)
         regularized = regularized_status(code)
         evaluations += int(stats[1])
-    status = "reached" if reached else _STATUS[int(code)] if program.task_rows else "no_task"
-    if not program.task_rows and not regularized:  # nothing ran: the values at the start
+    status = "reached" if reached else _STATUS[int(code)] if task_rows else "no_task"
+    if not task_rows and not regularized:  # nothing ran: the values at the start
         values = program.values(x[None])[0]
-    return LocalResult(x, bool(reached), status, errors, iterations, evaluations, restarts, regularized,
-                       multipliers, values if not program.layout.generic else None)
+    # (tuple.__new__: a named tuple's own __new__ is a Python call more per solve)
+    return tuple.__new__(LocalResult, (x, reached, status, errors, iterations, evaluations, restarts, regularized,
+                                       multipliers, values if not layout.generic else None))
 
 
+#: The stream's dtype (a restart stream is checked against it) and the counters'.
+_STREAM, _COUNTS = np.dtype(np.uint64), np.dtype(np.int64)
+#: Random restarts of a descent that may restart (:attr:`LocalSettings.max_restarts`).
+_RESTARTS = 2**62
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
 
 

@@ -103,6 +103,7 @@ class Hybrid(IKSolver):
         self._blank_report = {k: v for k, v in self.options.__dict__.items() if k != "global_options"}
         self._blank_report.update(start=None, max_iterations=None, escalated=False, restart_count=0, regularized=None,
                                   weighted=False, hull_runs=0, on_hulls=False, clear_first=False, population=None)
+        self._settings: dict = {}  # the engine settings of requests (local_settings' table)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
@@ -114,7 +115,7 @@ class Hybrid(IKSolver):
             return None
         x0, start = start_configuration(problem, request, o.warm_start)
         budget = default_iterations(request)
-        settings = local_settings(request, o, budget)
+        settings = local_settings(request, o, budget, self._settings)
         report = self._report(start, budget, 0, None, request)
         return BatchPlan(x0, settings if start == "middle" or not o.restarts else _in_basin(settings), report=report)
 
@@ -122,7 +123,7 @@ class Hybrid(IKSolver):
         o = self.options
         x0, start = start_configuration(problem, request, o.warm_start)
         budget = default_iterations(request)
-        settings = local_settings(request, o, budget)
+        settings = local_settings(request, o, budget, self._settings)
         draws = stream(request.seed)  # the engine's restarts, one stream through every phase
         first = settings if start == "middle" or not o.restarts else _in_basin(settings)
         opening = None
@@ -133,9 +134,10 @@ class Hybrid(IKSolver):
             opening = solve_local(problem.program, x0, draws, first, deadline=request.deadline)
             if opening.reached and (problem.priorities  # (no multipliers: optimal, nothing was regularized)
                                     or reaching_is_optimal(problem.program, opening.x, opening.multipliers)):
-                return Outcome(opening.x, "tolerance", opening.iterations, opening.evaluations, None,  # (positional:
-                               self._report(start, budget, opening.restarts, opening.regularized, request),  # cheaper)
-                               {}, opening.task_errors, opening.values)
+                report = self._report(start, budget, opening.restarts, opening.regularized, request)
+                # (tuple.__new__: the named tuple's own __new__ is a Python call more per solve)
+                return tuple.__new__(Outcome, (opening.x, "tolerance", opening.iterations, opening.evaluations, None,
+                                               report, {}, opening.task_errors, opening.values, None))
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
 
     def clears_first(self, problem) -> bool:

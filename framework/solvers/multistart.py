@@ -54,28 +54,26 @@ def default_iterations(request: Request) -> int:
 
 def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
     """The first start and where it came from: ``initial``, the regularizers' reference
-    (:attr:`~framework.problem.Problem.previous`), or the box middle."""
+    (:attr:`~framework.problem.Problem.previous`), or the box middle (the robot's own, read-only: the engine
+    copies its start)."""
     if request.initial is not None:
         return request.initial[0].copy(), "initial"
     previous = problem.previous if warm_start else None
-    return (previous, "previous") if previous is not None else (problem.robot.middle.copy(), "middle")
+    return (previous, "previous") if previous is not None else (problem.robot.middle, "middle")
 
 
-def local_settings(request: Request, options, max_iterations: int) -> LocalSettings:
-    """The engine settings of a request (memoized: a solve should not pay for building them)."""
-    key = (request.tolerance, request.angle_tolerance, max_iterations, options.stall, options.restarts,
-           options.polish, options.regularize)  # what the settings read (options may hold unhashable tables)
-    cached = _SETTINGS.get(key)
+def local_settings(request: Request, options, max_iterations: int, made: dict) -> LocalSettings:
+    """The engine settings of a request for a solver's ``options`` (memoized in ``made``, the solver's own table:
+    a solve should not pay for building them)."""
+    key = (request.tolerance, request.angle_tolerance, max_iterations)
+    cached = made.get(key)
     if cached is None:
-        if len(_SETTINGS) > 256:
-            _SETTINGS.clear()
-        cached = _SETTINGS[key] = LocalSettings(
+        if len(made) > 256:
+            made.clear()
+        cached = made[key] = LocalSettings(
             tolerance=request.tolerance, angle_tolerance=request.angle_tolerance, max_iterations=max_iterations,
             stall=options.stall, restarts=options.restarts, polish=options.polish, regularize=options.regularize)
     return cached
-
-
-_SETTINGS: dict[tuple, LocalSettings] = {}
 
 
 def stop_reason(reached: bool, request: Request) -> str:
@@ -94,16 +92,20 @@ class MultistartLM(IKSolver):
     uses_jacobians = True
     kind = "local engine"
 
+    def __init__(self, options=None):
+        super().__init__(options)
+        self._settings: dict = {}  # the engine settings of requests (local_settings' table)
+
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, start = start_configuration(problem, request, self.options.warm_start)
         iterations = default_iterations(request)
-        settings = local_settings(request, self.options, iterations)
+        settings = local_settings(request, self.options, iterations, self._settings)
         return BatchPlan(x0, settings, escalates=False, report=self._report(start, iterations, 0, None))
 
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
         iterations = default_iterations(request)
-        result = solve_local(problem.program, x0, request.seed, local_settings(request, self.options, iterations),
+        result = solve_local(problem.program, x0, request.seed, local_settings(request, self.options, iterations, self._settings),
                              deadline=request.deadline)
         if request.callback is not None:
             request.callback(1, float(problem.cost(result.x)[0]), result.x.copy())
