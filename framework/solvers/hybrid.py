@@ -104,6 +104,7 @@ class Hybrid(IKSolver):
         self._blank_report.update(start=None, max_iterations=None, escalated=False, restart_count=0, regularized=None,
                                   weighted=False, hull_runs=0, on_hulls=False, clear_first=False, population=None)
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
+        self._basin: dict[LocalSettings, LocalSettings] = {}  # their warm-start variants (_in_basin's table)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
@@ -117,7 +118,8 @@ class Hybrid(IKSolver):
         budget = default_iterations(request)
         settings = local_settings(request, o, budget, self._settings)
         report = self._report(start, budget, 0, None, request)
-        return BatchPlan(x0, settings if start == "middle" or not o.restarts else _in_basin(settings), report=report)
+        first = settings if start == "middle" or not o.restarts else self._in_basin(settings)
+        return BatchPlan(x0, first, report=report)
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options
@@ -125,7 +127,7 @@ class Hybrid(IKSolver):
         budget = default_iterations(request)
         settings = local_settings(request, o, budget, self._settings)
         draws = stream(request.seed)  # the engine's restarts, one stream through every phase
-        first = settings if start == "middle" or not o.restarts else _in_basin(settings)
+        first = settings if start == "middle" or not o.restarts else self._in_basin(settings)
         opening = None
         if not (problem.checks_collisions or o.global_iterations or request.callback):
             # the common case: the engine from the start; it is the answer when it reaches the task and the
@@ -139,6 +141,15 @@ class Hybrid(IKSolver):
                 return tuple.__new__(Outcome, (opening.x, "tolerance", opening.iterations, opening.evaluations, None,
                                                report, {}, opening.task_errors, opening.values, None))
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
+
+    def _in_basin(self, settings: LocalSettings) -> LocalSettings:
+        """The settings of a descent that stays in the warm start's basin (no restart, a patient stall rule)."""
+        cached = self._basin.get(settings)
+        if cached is None:
+            if len(self._basin) > 256:
+                self._basin.clear()
+            cached = self._basin[settings] = replace(settings, restarts=False, stall=WARM_STALL)
+        return cached
 
     def clears_first(self, problem) -> bool:
         """Whether each descent first solves the problem without its collision terms (see module, 2.: collision
@@ -274,19 +285,6 @@ class Hybrid(IKSolver):
                               on_hulls=any(best is r for r in hull_runs), clear_first=check is not None)
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values, collisions=check)  # check: made at x, when made
-
-
-def _in_basin(settings: LocalSettings) -> LocalSettings:
-    """The settings of a descent that stays in the warm start's basin (no restart, a patient stall rule)."""
-    cached = _BASIN.get(settings)
-    if cached is None:
-        if len(_BASIN) > 256:
-            _BASIN.clear()
-        cached = _BASIN[settings] = replace(settings, restarts=False, stall=WARM_STALL)
-    return cached
-
-
-_BASIN: dict[LocalSettings, LocalSettings] = {}
 
 
 class _Counter:
