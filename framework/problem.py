@@ -85,9 +85,9 @@ class Problem:
         terms = objective.terms
         if not terms:
             raise TaskError("a problem needs an objective of at least one cost term")
-        if bounds != "resample" and bounds not in BOUNDS:
+        if bounds not in BOUNDS:
             raise TaskError(f"bounds handling must be one of {BOUNDS}; got {bounds!r}")
-        if priorities is not True and not isinstance(priorities, bool):
+        if not isinstance(priorities, bool):
             raise TaskError(f"priorities must be true or false; got {priorities!r}")
         if bounds == "penalty" and not any(getattr(t, "penalizes_limits", False) for _, t in terms):
             from .costs import JointLimitPenalty

@@ -204,18 +204,14 @@ def _request(problem: Problem, seed, tolerance, angle_tolerance, time_budget, ma
              stop_at_tolerance, callback, progress) -> Request:
     """:func:`make_request` with its arguments in order (a solve's Python is most of a pose solve's time: the
     common cases are tested first, each check once)."""
-    if time_budget is None:
-        deadline = None
-    elif type(time_budget) is float and 0.0 < time_budget < math.inf:
-        deadline = time.monotonic() + time_budget
-    elif _positive(time_budget):
+    deadline = None
+    if time_budget is not None:
+        if not _positive(time_budget):
+            raise SolverError(f"time_budget must be a positive number of seconds; got {time_budget!r}")
         deadline = time.monotonic() + float(time_budget)
-    else:
-        raise SolverError(f"time_budget must be a positive number of seconds; got {time_budget!r}")
-    if not (type(tolerance) is float and 0.0 < tolerance < math.inf):
-        if not _positive(tolerance):
-            raise SolverError(f"tolerance must be a positive number; got {tolerance!r}")
-        tolerance = float(tolerance)
+    if not _positive(tolerance):
+        raise SolverError(f"tolerance must be a positive number; got {tolerance!r}")
+    tolerance = float(tolerance)
     if angle_tolerance is None:
         angle_tolerance = tolerance
     elif _positive(angle_tolerance):
@@ -224,8 +220,7 @@ def _request(problem: Problem, seed, tolerance, angle_tolerance, time_budget, ma
         raise SolverError(f"angle_tolerance must be a positive number [rad]; got {angle_tolerance!r}")
     if max_iterations is not None:
         max_iterations = positive_int(max_iterations, "max_iterations")
-    if not (type(population) is int and 0 < population <= MAX_POPULATION):
-        population = positive_int(population, "population", maximum=MAX_POPULATION)
+    population = positive_int(population, "population", maximum=MAX_POPULATION)
     if initial is not None:
         initial = problem.robot.check_population(initial, "initial configuration")
     if type(seed) is int and seed >= 0:  # the common case

@@ -70,7 +70,7 @@ class Pose(Term):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"pose[{frame}]"
-        self._parameters = pose_parameters(target, lambda: f"pose target of {frame!r}")  # (set_target, less a call)
+        self.set_target(target)
 
     def set_target(self, target) -> None:
         """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""

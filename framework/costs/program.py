@@ -25,7 +25,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .base import Objective, Term
 
 _VERSION = attrgetter("version")
-_FLOAT = np.dtype(float)
 _LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_REGULARIZER}
 
 
@@ -223,29 +222,21 @@ class Program:
         if len(pairs) == 1:  # (the common case: no zip, no comprehension frames)
             (weight, term), = pairs
             weights, terms = (weight,), (term,)
-            key = ("layout", ((term.level, term.name, (type(term), term.frames) if term.fixed_layout
-                               else term.layout_key(robot)),))
+            key = ("layout", ((term.level, term.name, term.layout_key(robot)),))
         else:
             weights, terms = zip(*pairs) if pairs else ((), ())  # floats (``Objective`` checked)
             key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
-        layout = robot._cache.get(key)  # (robot.memo, without its call when the layout is made)
-        if layout is None:
-            layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
+        layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
         packed = layout.packed_terms
         if len(packed) == 1:  # a copy: the program's own
-            params = terms[packed[0]].parameters(robot)
-            params = params.copy() if type(params) is np.ndarray and params.dtype == _FLOAT else \
-                np.array(params, dtype=float)
+            params = np.array(terms[packed[0]].parameters(robot), dtype=float)
         else:
             flat = [terms[k].parameters(robot) for k in packed]
             params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
-        table = layout._bflt.get(weights)
-        if table is None:
-            table = layout.bflt(weights)
         self.__dict__.update(layout.shared)  # what every program of the layout reads from it (see _Layout.shared)
         self.robot, self.terms, self.weight_list, self.layout = robot, terms, weights, layout
-        self.prog = (layout.bint, table, params, *layout.prog_tail)
-        self._versions = [term.version] if len(terms) == 1 else list(map(_VERSION, terms))
+        self.prog = (layout.bint, layout.bflt(weights), params, *layout.prog_tail)
+        self._versions = list(map(_VERSION, terms))
 
     @cached_property
     def weights(self) -> np.ndarray:

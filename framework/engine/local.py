@@ -80,8 +80,6 @@ class LocalSettings:
             object.__setattr__(self, name, int(getattr(self, name)))
         object.__setattr__(self, "restarts", bool(self.restarts))
         object.__setattr__(self, "regularize", bool(self.regularize))
-        # reach's settings arguments in its order (made once: solve_local passes them on every call)
-        object.__setattr__(self, "_reach", (self.tolerance, self.angular, self.max_iterations, self.stall))
 
     @property
     def angular(self) -> float:
@@ -155,7 +153,7 @@ def solve_local(
     n = lower.shape[0]
     if type(rng) is not np.ndarray:
         rng = stream(rng)
-    elif (rng.dtype is not _STREAM and rng.dtype != _STREAM) or rng.shape != (1,) or not rng.flags.writeable:
+    elif rng.dtype != _STREAM or rng.shape != (1,) or not rng.flags.writeable:
         raise SolverError(f"local engine: a restart stream is a writeable uint64 array of shape (1,) (see "
                           f"framework.engine.draws.stream); got {rng.dtype} {rng.shape}")
     drawn = x0 is None
@@ -168,16 +166,16 @@ def solve_local(
             raise SolverError(f"local engine: the start must be {n} joint coordinates; got shape {x.shape}")
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
-    deadline_ns = 0 if deadline is None else int(deadline * 1e9)  # (as _nanoseconds: a call less per solve)
-    stats = np.zeros(3, _COUNTS)
+    deadline_ns = _nanoseconds(deadline)
+    stats = np.zeros(3, dtype=np.int64)
     errors = np.empty(layout.task_tolerances.size)
     values = np.zeros(len(program.terms))
     code = REACHED
     if task_rows:
-        args = (x, drawn, _RESTARTS if settings.restarts else 0, rng, lower, upper, box_wrap, program.kin,
-                program.prog, *settings._reach, deadline_ns, settings.polish, errors, values, stats)
-        entry = layout.entries.get(reach)
-        code = (entry or _entry(program, reach, args))(*args)
+        args = (x, drawn, settings.max_restarts, rng, lower, upper, box_wrap, program.kin, program.prog,
+                settings.tolerance, settings.angular, settings.max_iterations, settings.stall, deadline_ns,
+                settings.polish, errors, values, stats)
+        code = _entry(program, reach, args)(*args)
     iterations, evaluations, restarts = stats.tolist()
     reached = code == REACHED
     regularized = multipliers = None
@@ -196,8 +194,8 @@ def solve_local(
                                        multipliers, values if not layout.generic else None))
 
 
-#: The stream's dtype (a restart stream is checked against it) and the counters'.
-_STREAM, _COUNTS = np.dtype(np.uint64), np.dtype(np.int64)
+#: The stream's dtype (a restart stream is checked against it).
+_STREAM = np.dtype(np.uint64)
 #: Random restarts of a descent that may restart (:attr:`LocalSettings.max_restarts`).
 _RESTARTS = 2**62
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}

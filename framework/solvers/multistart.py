@@ -105,8 +105,8 @@ class MultistartLM(IKSolver):
     def solve(self, problem, request: Request) -> Outcome:
         x0, start = start_configuration(problem, request, self.options.warm_start)
         iterations = default_iterations(request)
-        result = solve_local(problem.program, x0, request.seed, local_settings(request, self.options, iterations, self._settings),
-                             deadline=request.deadline)
+        settings = local_settings(request, self.options, iterations, self._settings)
+        result = solve_local(problem.program, x0, request.seed, settings, deadline=request.deadline)
         if request.callback is not None:
             request.callback(1, float(problem.cost(result.x)[0]), result.x.copy())
         return Outcome(result.x, stop_reason(result.reached, request), result.iterations, result.evaluations,
