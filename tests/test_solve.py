@@ -272,3 +272,30 @@ def test_hybrid_passes_its_global_options_to_the_global_phase():
     assert result.success and result.settings["escalated"] is False
     with pytest.raises(fw.SolverError, match="sigma_zero"):  # the table reaches the global solver, which checks it
         solve(problem, "hybrid", seed=1, options={"global_iterations": 3, "global_options": {"sigma_zero": 0.05}})
+
+
+def test_solvers_are_made_once_per_options_and_bad_options_still_raise():
+    """A loop passing the same options to every solve reuses one solver instance (validating options costs a
+    third of a pose solve); options that differ — in value or in type — make their own, and invalid ones raise
+    every time (nothing is cached for them)."""
+    from framework.solvers import ik_solver
+
+    a = ik_solver("hybrid", {"stall": 8, "polish": 2})
+    assert ik_solver("hybrid", {"polish": 2, "stall": 8}) is a  # the order of the table does not matter
+    assert a.options.stall == 8 and a.options.polish == 2
+    assert ik_solver("hybrid", {"stall": 9, "polish": 2}) is not a
+    assert ik_solver("hybrid") is ik_solver("hybrid", {}) is not a
+    whole = ik_solver("hybrid", {"stall": 8.0, "polish": 2})  # an integral float is a valid count, its own entry
+    assert whole is not a and whole.options.stall == 8 and type(whole.options.stall) is int
+    for _ in range(2):
+        with pytest.raises(fw.SolverError, match="stall"):
+            ik_solver("hybrid", {"stall": 8.5})
+        with pytest.raises(fw.SolverError, match="polish"):
+            ik_solver("hybrid", {"polish": -1})
+    table = {"global_iterations": 3, "global_options": {"sigma0": 0.05}}  # unhashable: a new instance each time
+    assert ik_solver("hybrid", table) is not ik_solver("hybrid", table)
+    robot = fw.load_robot("puma560")
+    problem = Problem(robot, fw.Pose("ee", robot.frame_placement(robot.middle + 0.4, "ee")))
+    first, again = (solve(problem, "hybrid", seed=2, options={"stall": 8}) for _ in range(2))
+    np.testing.assert_array_equal(first.configuration, again.configuration)
+    assert first.settings["stall"] == 8

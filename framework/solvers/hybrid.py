@@ -82,9 +82,11 @@ class HybridOptions:
 
     def __post_init__(self) -> None:
         if self.global_iterations is not None:
-            positive_int(self.global_iterations, "hybrid option global_iterations", minimum=0)
-        positive_int(self.stall, "hybrid option stall")
-        positive_int(self.polish, "hybrid option polish", minimum=0)
+            object.__setattr__(self, "global_iterations",
+                               positive_int(self.global_iterations, "hybrid option global_iterations", minimum=0))
+        # stored as the ints they were checked to be (an integral float such as 8.0 is a valid count)
+        object.__setattr__(self, "stall", positive_int(self.stall, "hybrid option stall"))
+        object.__setattr__(self, "polish", positive_int(self.polish, "hybrid option polish", minimum=0))
 
 
 @register_ik("hybrid")

@@ -41,8 +41,9 @@ class MultistartOptions:
     warm_start: bool = True
 
     def __post_init__(self) -> None:
-        positive_int(self.stall, "multistart_lm option stall")
-        positive_int(self.polish, "multistart_lm option polish", minimum=0)
+        # stored as the ints they were checked to be (an integral float such as 8.0 is a valid count)
+        object.__setattr__(self, "stall", positive_int(self.stall, "multistart_lm option stall"))
+        object.__setattr__(self, "polish", positive_int(self.polish, "multistart_lm option polish", minimum=0))
 
 
 def default_iterations(request: Request) -> int:
