@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .collision import CollisionReport
+from .engine.draws import seed_of
 from .errors import SolverError
 from .problem import Problem
 from .solvers import Request, ik_solver
@@ -226,12 +227,10 @@ def _request(problem: Problem, seed, tolerance, angle_tolerance, time_budget, ma
     if type(seed) is int and seed >= 0:  # the common case
         rng = _LazyGenerator(seed)
     elif isinstance(seed, np.random.Generator):
-        rng, seed = _given(seed), int(seed.integers(0, 2**63))
-    elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0:
-        seed = int(seed)
-        rng = _LazyGenerator(seed)
+        rng, seed = _given(seed), seed_of(seed)
     else:
-        raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
+        seed = seed_of(seed)  # (raises for anything but an integer >= 0)
+        rng = _LazyGenerator(seed)
     # (positionally: a named tuple's keywords cost 0.5 µs per solve)
     return Request(rng, seed, tolerance, angle_tolerance, max_iterations, population, initial, deadline,
                    stop_at_tolerance, callback, progress)

@@ -29,12 +29,18 @@ def stream(seed: int | np.random.Generator) -> np.ndarray:
     if type(seed) is int and 0 <= seed < 2**64:  # the common case needs no check
         state[0] = seed
         return state
+    state[0] = seed_of(seed) % 2**64
+    return state
+
+
+def seed_of(seed: int | np.integer | np.random.Generator) -> int:
+    """The integer a stream starts from: an integer ``>= 0`` as a Python int, or one drawn from a generator;
+    anything else raises :class:`SolverError`."""
     if isinstance(seed, np.random.Generator):
-        seed = int(seed.integers(0, 2**63))
+        return int(seed.integers(0, 2**63))
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise SolverError(f"seed must be an integer >= 0 or a numpy.random.Generator; got {seed!r}")
-    state[0] = int(seed) % 2**64
-    return state
+    return int(seed)
 
 
 @numba.njit(cache=True)
