@@ -1,11 +1,39 @@
-"""The compiled loops' small dense linear algebra against numpy and scipy: null spaces, symmetric eigenproblems and
-the trust-region subproblem of the Newton phase."""
+"""The compiled loops' small dense linear algebra against numpy and scipy: the damped Gauss-Newton steps of the
+reaching loop, null spaces, symmetric eigenproblems and the trust-region subproblem of the Newton phase."""
 
 import numpy as np
 import pytest
 import scipy.optimize as so
 
-from framework.engine.linalg import null_space, symmetric_eigen, trust_region_step
+from framework.engine.linalg import (DENSE_ROWS, least_norm_step, levenberg_marquardt_step, null_space,
+                                     symmetric_eigen, trust_region_step)
+
+
+def test_damped_steps_solve_their_normal_equations_and_both_summations_give_the_same_numbers(rng):
+    """``dx = −(JᵀJ + λI)⁻¹Jᵀr`` and ``dx = −Jᵀ(JJᵀ + λI)⁻¹r`` against numpy's solve of the same systems (a step of
+    zeros, what a loop that did nothing returns, is off by ``‖dx‖``, of order one here). A short stack is summed
+    entry by entry, a long one row by row skipping zero rows: the short stack padded with zero rows past
+    :data:`DENSE_ROWS` per coordinate takes the second way and must give bit for bit the same step."""
+    for trial in range(200):
+        n = int(rng.integers(1, 10))
+        m = int(rng.integers(n, DENSE_ROWS * n + 1))
+        J, r, damping = rng.normal(size=(m, n)), rng.normal(size=m), float(10.0 ** rng.uniform(-12, 0))
+        if trial % 4 == 0:
+            J[rng.random(size=(m, n)) < 0.2] = 0.0  # zero entries (a coordinate that does not move a block)
+        A, L, g, dx = np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n)
+        assert levenberg_marquardt_step(J, r, damping, A, L, g, dx)
+        expected = -np.linalg.solve(J.T @ J + damping * np.eye(n), J.T @ r)
+        np.testing.assert_allclose(dx, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
+        padded_J = np.vstack([J, np.zeros((DENSE_ROWS * n + 1 - m, n))])
+        padded_r = np.concatenate([r, np.zeros(DENSE_ROWS * n + 1 - m)])
+        rows_dx = np.empty(n)
+        assert levenberg_marquardt_step(padded_J, padded_r, damping, A, L, g, rows_dx)
+        assert np.array_equal(rows_dx, dx)
+        k = int(rng.integers(1, n + 1))  # fewer rows than coordinates: the least-norm form
+        Jk, rk, y, step = J[:k], r[:k].copy(), np.empty(k), np.empty(n)
+        assert least_norm_step(Jk, rk, damping, np.empty((k, k)), np.empty((k, k)), y, step)
+        expected = -Jk.T @ np.linalg.solve(Jk @ Jk.T + damping * np.eye(k), rk)
+        np.testing.assert_allclose(step, expected, rtol=1e-7, atol=1e-9 * np.abs(expected).max())
 
 
 def test_null_space_is_orthonormal_and_has_the_dimension_numpy_ranks(rng):

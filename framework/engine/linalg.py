@@ -17,6 +17,13 @@ def cholesky_solve(A, b, L, out) -> bool:
     ``L (k, k)`` is scratch (its diagonal holds the reciprocals of the factor's). Returns False (``out``
     undefined) when ``A`` is not numerically positive definite.
     """
+    return _cholesky_solve(A, b, L, out)
+
+
+@numba.njit(cache=True, inline="always")
+def _cholesky_solve(A, b, L, out) -> bool:
+    """:func:`cholesky_solve`'s body, inlined where a step solves its system (a call costs a sixth of a 6 x 6
+    solve)."""
     k = A.shape[0]
     for j in range(k):  # column by column; the diagonal of L holds 1 / L_jj (one division per column)
         s = A[j, j]
@@ -108,7 +115,7 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
     """
     m, n = Jr.shape
     gram(Jr, damping, A)
-    if not cholesky_solve(A, r, L, y):
+    if not _cholesky_solve(A, r, L, y):
         return False
     for c in range(n):
         s = 0.0
@@ -118,13 +125,34 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
     return True
 
 
+#: Rows per coordinate up to which :func:`levenberg_marquardt_step` sums every entry (beyond: row by row,
+#: skipping zero rows).
+DENSE_ROWS = 4
+
+
 @numba.njit(cache=True)
 def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
     """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)``; ``A, L (n, n)``, ``g (n,)`` scratch.
 
-    Summed row by row, skipping rows whose residual and first Jacobian entries are zero — hinge rows that are
-    clear (a collision term has hundreds, almost all clear) — so the cost follows the rows that count."""
+    A short stack (at most :data:`DENSE_ROWS` rows per coordinate: a pose, two hands) is summed entry by entry
+    without tests. A longer one is summed row by row, skipping rows whose residual and first Jacobian entries
+    are zero — hinge rows that are clear (a collision term has hundreds, almost all clear) — so the cost follows
+    the rows that count. Both add the rows' products in row order: the same numbers (a skipped term is a zero)."""
     m, n = Jr.shape
+    if m <= DENSE_ROWS * n:
+        for i in range(n):
+            s = 0.0
+            for p in range(m):
+                s -= Jr[p, i] * r[p]
+            g[i] = s
+            for j in range(i + 1):
+                t = 0.0
+                for p in range(m):
+                    t += Jr[p, i] * Jr[p, j]
+                A[i, j] = t
+                A[j, i] = t
+            A[i, i] += damping
+        return _cholesky_solve(A, g, L, dx)
     for i in range(n):
         g[i] = 0.0
         for j in range(i + 1):
@@ -150,7 +178,7 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
         A[i, i] += damping
         for j in range(i):
             A[j, i] = A[i, j]
-    return cholesky_solve(A, g, L, dx)
+    return _cholesky_solve(A, g, L, dx)
 
 
 @numba.njit(cache=True, inline="always")

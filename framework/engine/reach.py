@@ -99,7 +99,7 @@ def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     return levenberg_marquardt_step(Jr, r, damping, Ak, Lk, y[:k], dx)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def held(x, lower, upper, wraps, d) -> bool:
     """Whether a coordinate at ``x`` in ``[lower, upper]`` (``wraps``: no bounds) sits on a bound that a move in
     direction ``d`` (its sign) pushes through."""
