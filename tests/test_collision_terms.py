@@ -263,7 +263,7 @@ def test_jacobians_of_the_frames_a_call_needs_equal_every_frames(rng):
                          + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
     kin, prog = problem.program.kin, problem.program.prog
     lazy = (without_contacts(prog[0])[0], *prog[1:])
-    whole, split, part = (workspace(kin, prog, robot.n) for _ in range(3))
+    (own_whole, whole), (own_split, split), (own_part, part) = (workspace(kin, prog, robot.n) for _ in range(3))
     active = clear = 0
     for x in robot.random_configurations(rng, 120):
         m = linearize(x, TASK, kin, prog, whole, YES, COMPUTE)
@@ -295,7 +295,7 @@ def test_restoring_steps_see_the_rows_in_contact_as_the_kernel_stacks_them(rng):
     problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.2, 0.4]) + fw.Position("arm2_ee", [0.5, -0.2, 0.4])
                          + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
     kin, prog = problem.program.kin, problem.program.prog
-    whole, kept = workspace(kin, prog, robot.n), workspace(kin, prog, robot.n)
+    (own_whole, whole), (own_kept, kept) = (workspace(kin, prog, robot.n) for _ in range(2))
     near = prog[0].copy()
     compacted = 0
     for x in robot.random_configurations(rng, 60):

@@ -236,7 +236,7 @@ def _curvature(program, x, mu):
     from framework.costs.curvature import block_curvature
     from framework.costs.kernels import linearize, workspace
 
-    ws = workspace(program.kin, program.prog, x.size)
+    own, ws = workspace(program.kin, program.prog, x.size)  # (own: the buffer ws is carved from, kept alive)
     linearize(x, 1, program.kin, program.prog, ws, True, 1)
     H = np.zeros((x.size, x.size))
     block_curvature(0, mu, ws[0], ws[2], program.prog[0], program.prog[2], program.prog[3], program.prog[5],

@@ -142,7 +142,7 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
     program = problem.program
     X = robot.random_configurations(rng, 60)
     values = problem.values(X)[:, 1]
-    ws = workspace(program.kin, program.prog, robot.n)
+    own, ws = workspace(program.kin, program.prog, robot.n)  # (own: the buffer ws is carved from, kept alive)
     clear = [hinges_clear(x, program.kin, program.prog, ws) for x in X]
     assert clear == [bool(v == 0) for v in values.tolist()]
     assert 0 < sum(clear) < len(clear)

@@ -445,7 +445,7 @@ def test_jacobians_from_kept_poses_equal_a_full_linearization(rng):
     n = robot.n
     active = clear = 0
     for x in robot.random_configurations(rng, 30):
-        full, kept = workspace(program.kin, program.prog, n), workspace(program.kin, program.prog, n)
+        (own_full, full), (own_kept, kept) = (workspace(program.kin, program.prog, n) for _ in range(2))
         m = linearize(x, TASK, program.kin, program.prog, full, YES, COMPUTE)
         linearize(x, TASK, program.kin, program.prog, kept, NO, COMPUTE)
         kept[4][:] = np.nan  # nothing of a previous Jacobian may survive

@@ -2,7 +2,7 @@
 
 The arguments are the packed arrays of :class:`~framework.costs.program.Program`, grouped as tuples:
 ``kin = (jint, jgeo, fslot, fgeo)`` (the kinematic tables), ``prog = (bint, bflt, params, idx, wrap, chain_ptr,
-chain_idx)`` (the blocks) and a workspace ``ws = (out, W, Jf, r, Jr, L3, E9)`` from :func:`workspace`.
+chain_idx)`` (the blocks) and a workspace ``ws = (out, W, Jf, r, Jr, L3, E9)`` carved by :func:`workspace`.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numba
 import numpy as np
 
 from ..kinematics import fk_one, frame_jacobians_where
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive
+from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, carve, keep_alive
 from .blocks import (
     COM,
     COUNT,
@@ -53,7 +53,9 @@ def workspace(kin, prog, n):
     """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
     ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
     scratch (:func:`~framework.costs.collision_blocks.scratch_size`, at least ``k``: it holds the frames whose
-    Jacobians a call needs, before the blocks use it) — as views of one allocation."""
+    Jacobians a call needs, before the blocks use it) — as ``(buffer, ws)``: one allocation and the workspace
+    ``ws`` carved from it (views without an owner: the caller keeps ``buffer`` alive while it uses them, see
+    :func:`~framework.native.keep_alive`; a ``reshape`` per view cost a fifth of a microsecond more)."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
@@ -67,19 +69,19 @@ def workspace(kin, prog, n):
         total += size
     buffer = np.empty(total)
     a = 0
-    out = buffer[a : a + sizes[0]].reshape((k, 12))
+    out = carve(buffer, a, (k, 12))
     a += sizes[0]
-    W = buffer[a : a + sizes[1]].reshape((J, 12))
+    W = carve(buffer, a, (J, 12))
     a += sizes[1]
-    Jf = buffer[a : a + sizes[2]].reshape((k, 6, n))
+    Jf = carve(buffer, a, (k, 6, n))
     a += sizes[2]
-    r = buffer[a : a + sizes[3]]
+    r = carve(buffer, a, sizes[3])
     a += sizes[3]
-    Jr = buffer[a : a + sizes[4]].reshape((rows, n))
+    Jr = carve(buffer, a, (rows, n))
     a += sizes[4]
-    L3 = buffer[a : a + 9].reshape((3, 3))
-    E9 = buffer[a + 9 : a + 9 + sizes[6]]
-    return out, W, Jf, r, Jr, L3, E9
+    L3 = carve(buffer, a, (3, 3))
+    E9 = carve(buffer, a + 9, sizes[6])
+    return buffer, (out, W, Jf, r, Jr, L3, E9)
 
 
 @numba.njit(cache=True)
@@ -273,8 +275,7 @@ def _population(X, kin, prog, V, F, weighted) -> int:
     jint, jgeo, fslot, fgeo = kin
     bint, bflt, params, idx, wrap = prog[0], prog[1], prog[2], prog[3], prog[4]
     n = X.shape[1]
-    own = workspace(kin, prog, n)
-    out, W, Jf, r, Jr, L3, E9 = borrow_ws(own)
+    own, (out, W, Jf, r, Jr, L3, E9) = workspace(kin, prog, n)
     bad = -1
     for m in range(X.shape[0]):
         x = X[m]
@@ -303,8 +304,7 @@ def residuals_at(x, level, kin, prog, r_out, J_out) -> int:
     """Residuals ``r_out`` and Jacobians ``J_out`` (preallocated with every block's rows) of the blocks of
     ``level`` at ``x`` (``-1``: levels 1 and 2); returns the number of rows written."""
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    own = workspace(kin, prog, x.shape[0])
-    ws = borrow_ws(own)
+    own, ws = workspace(kin, prog, x.shape[0])
     m = linearize(borrow(x), level, kin, prog, ws, YES, COMPUTE)
     r_out[:m] = ws[3][:m]
     J_out[:m] = ws[4][:m]
@@ -317,8 +317,7 @@ def task_errors_at(X, kin, prog, errors):
     """Each task block's error ``‖r_b‖`` [m or rad] at each configuration of ``X`` ``(pop, n)`` into ``errors``
     ``(pop, blocks)``."""
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    own = workspace(kin, prog, X.shape[1])
-    ws = borrow_ws(own)
+    own, ws = workspace(kin, prog, X.shape[1])
     X = borrow(X)
     for m in range(X.shape[0]):
         linearize(X[m], TASK, kin, prog, ws, NO, COMPUTE)

@@ -79,7 +79,7 @@ from ..costs.kernels import (
     term_values,
     workspace,
 )
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, carve, keep_alive, matrix, square
+from ..native import borrow, borrow_kin, borrow_prog, carve, keep_alive, matrix, square
 from .clock import monotonic_ns
 from .linalg import cholesky_solve, gram, lu_solve, null_space, symmetric_eigen, trust_region_step
 from .reach import bounded_step, held, project, rows_of, squared_norm
@@ -662,14 +662,14 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     chain_ptr, chain_idx = prog[5], prog[6]
-    own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
+    (own_cur, cur), (own_tri, tri) = workspace(kin, prog, n), workspace(kin, prog, n)
     big = _max_rows(prog)
     mq = m + q  # task rows, then regularizer rows (held at zero) in the active set
     nb = prog[0].shape[0]
     # the contact rows near x (the blocks with their margins widened by BAND; their rows rn, Jn at x once
     # band_at_x): made only with contact rows
     near_contact, band_at_x = contact.any(), False
-    ws_rows = own_cur[3].shape[0] if near_contact else 0
+    ws_rows = cur[3].shape[0] if near_contact else 0
     band_params = prog[2].shape[0] if near_contact else 0
     # the scratch arrays, carved from one allocation per type, the zeroed ones first (some sixty allocations cost
     # ~5 µs, as much as a Newton iteration)
@@ -726,7 +726,6 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
         widen_margins(prog[0], prog[2], BAND, band_margins)
     band_prog = (prog[0], prog[1], band_margins, prog[3], prog[4], prog[5], prog[6])
     _regularizer_rows(prog, first)
-    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
     cur_r = (cur[0], cur[1], cur[2], r_cur, Jr_cur, cur[5], cur[6])
     tri_r = (tri[0], tri[1], tri[2], r_tri, Jr_tri, tri[5], tri[6])
     linearize(x, TASK, kin, prog, cur, YES, COMPUTE)
@@ -1061,8 +1060,7 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     chain_ptr, chain_idx = prog[5], prog[6]
-    own_cur, own_tri = workspace(kin, prog, n), workspace(kin, prog, n)
-    cur, tri = borrow_ws(own_cur), borrow_ws(own_tri)
+    (own_cur, cur), (own_tri, tri) = workspace(kin, prog, n), workspace(kin, prog, n)
     linearize(x, TASK_AND_REGULARIZERS, kin, prog, cur, YES, COMPUTE)
     evaluations = 1
     g, H = np.empty(n), np.empty((n, n))
@@ -1180,8 +1178,7 @@ def derivatives_at(x, level, kin, prog, smoothing, curvature):
     outside the loops: tests, reports)."""
     n = x.shape[0]
     kin, prog = borrow_kin(kin), borrow_prog(prog)
-    own = workspace(kin, prog, n)
-    ws = borrow_ws(own)
+    own, ws = workspace(kin, prog, n)
     linearize(borrow(x), level, kin, prog, ws, YES, COMPUTE)
     big = _max_rows(prog)
     g, H = np.empty(n), np.empty((n, n))

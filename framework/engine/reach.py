@@ -40,7 +40,7 @@ import numpy as np
 
 from ..costs.blocks import KIND, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS, is_contact, is_hinge
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace
-from ..native import borrow, borrow_kin, borrow_prog, borrow_ws, keep_alive, square
+from ..native import borrow, borrow_kin, borrow_prog, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
 from .linalg import least_norm_step, levenberg_marquardt_step
@@ -227,8 +227,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     n = x.shape[0]
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
-    own_ws, own_trial = workspace(kin, prog, n), workspace(kin, prog, n)
-    ws, trial = borrow_ws(own_ws), borrow_ws(own_trial)
+    (own_ws, ws), (own_trial, trial) = workspace(kin, prog, n), workspace(kin, prog, n)
     lazy_bint, has_contacts = without_contacts(prog[0])
     lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
     lazy = has_contacts  # the descent sees the blocks without the contact rows first
