@@ -26,16 +26,12 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
         for c in range(3):
             r[row + c] = out[fa, 9 + c] - params[p + c]
         if want_jacobian:
-            for c in range(3):
-                for i in range(n):
-                    Jr[row + c, i] = Jf[fa, c, i]
+            _translation_jacobian(Jf, fa, -1, Jr, row, n)
     elif kind == RELATIVE:
         for c in range(3):
             r[row + c] = out[fb, 9 + c] - out[fa, 9 + c] - params[p + c]
         if want_jacobian:
-            for c in range(3):
-                for i in range(n):
-                    Jr[row + c, i] = Jf[fb, c, i] - Jf[fa, c, i]
+            _translation_jacobian(Jf, fb, fa, Jr, row, n)
     elif kind == ORIENTATION:
         E = E9
         for a in range(3):
@@ -44,13 +40,7 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                                 + params[p + 6 + a] * out[fa, 6 + c])
         rotation_log(E, r[row : row + 3])
         if want_jacobian:
-            left_jacobian_inverse(r[row : row + 3], L3)
-            for a in range(3):
-                m0 = L3[a, 0] * params[p] + L3[a, 1] * params[p + 1] + L3[a, 2] * params[p + 2]
-                m1 = L3[a, 0] * params[p + 3] + L3[a, 1] * params[p + 4] + L3[a, 2] * params[p + 5]
-                m2 = L3[a, 0] * params[p + 6] + L3[a, 1] * params[p + 7] + L3[a, 2] * params[p + 8]
-                for i in range(n):  # row a of J_l⁻¹ R_tᵀ times J_ω
-                    Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]
+            _orientation_jacobian(Jf, fa, params, p, r, Jr, row, n, L3)
     elif kind == AXIS:
         axis_residual(out, Jf, fa, params, p, r, Jr, row, want_jacobian, n)
     elif kind == CONE:
@@ -110,3 +100,43 @@ def block_residual(b, x, out, Jf, bint, params, idx, wrap, r, Jr, row, want_jaco
                     Jr[row + k, i] = 0.0
                 Jr[row + k, k] = 1.0 if (v < lo or v > hi) else 0.0
     return rows
+
+
+@numba.njit(cache=True)
+def block_jacobian(b, out, Jf, bint, params, r, Jr, row, L3) -> int:
+    """The Jacobian rows of block ``b`` into ``Jr[row:]`` from its residual rows ``r[row:]``, already written at
+    these poses, for a position, relative position or orientation block (returns its row count; ``-1`` for other
+    kinds: :func:`block_residual` evaluates them whole). An accepted step's poses were evaluated for its residual:
+    its Jacobian needs no second rotation log."""
+    kind, p = bint[b, KIND], bint[b, PPTR]
+    n = Jf.shape[2]
+    if kind == POSITION:
+        _translation_jacobian(Jf, bint[b, FA], -1, Jr, row, n)
+    elif kind == RELATIVE:
+        _translation_jacobian(Jf, bint[b, FB], bint[b, FA], Jr, row, n)
+    elif kind == ORIENTATION:
+        _orientation_jacobian(Jf, bint[b, FA], params, p, r, Jr, row, n, L3)
+    else:
+        return -1
+    return bint[b, ROWS]
+
+
+@numba.njit(cache=True, inline="always")
+def _translation_jacobian(Jf, f, minus, Jr, row, n) -> None:
+    """``Jr[row:row + 3]``: the translation rows of frame ``f``'s Jacobian, less frame ``minus``'s (``-1``: none)."""
+    for c in range(3):
+        for i in range(n):
+            Jr[row + c, i] = Jf[f, c, i] if minus < 0 else Jf[f, c, i] - Jf[minus, c, i]
+
+
+@numba.njit(cache=True, inline="always")
+def _orientation_jacobian(Jf, fa, params, p, r, Jr, row, n, L3) -> None:
+    """``Jr[row:row + 3] = J_l⁻¹(r) R_tᵀ J_ω`` of an orientation block with residual ``r[row:row + 3] = log(R_tᵀ R)``
+    (``R_t``: the target rotation, row-major at ``params[p:p + 9]``); ``L3 (3, 3)`` scratch."""
+    left_jacobian_inverse(r[row : row + 3], L3)
+    for a in range(3):
+        m0 = L3[a, 0] * params[p] + L3[a, 1] * params[p + 1] + L3[a, 2] * params[p + 2]
+        m1 = L3[a, 0] * params[p + 3] + L3[a, 1] * params[p + 4] + L3[a, 2] * params[p + 5]
+        m2 = L3[a, 0] * params[p + 6] + L3[a, 1] * params[p + 7] + L3[a, 2] * params[p + 8]
+        for i in range(n):  # row a of J_l⁻¹ R_tᵀ times J_ω
+            Jr[row + a, i] = m0 * Jf[fa, 3, i] + m1 * Jf[fa, 4, i] + m2 * Jf[fa, 5, i]

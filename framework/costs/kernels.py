@@ -36,7 +36,7 @@ from .blocks import (
     rho_value,
 )
 from .collision_blocks import contact_row, scratch_size
-from .dispatch import block_residual
+from .dispatch import block_jacobian, block_residual
 
 # Arguments of compiled calls, as numpy scalars: numba compiles a callee once per *literal* Python int / bool it
 # is called with (a whole compile, seconds for the engine's kernels), but once for all values of an int64 / bool.
@@ -115,6 +115,11 @@ def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
             row += bint[b, ROWS]
             continue
         kind = bint[b, KIND]
+        if kinematics == 2 and want_jacobian:  # the residual rows are the previous call's: the Jacobian alone
+            rows = block_jacobian(b, out, Jf, bint, params, r, Jr, row, L3)
+            if rows >= 0:
+                row += rows
+                continue
         if is_contact(kind):
             contact_row(kind, out, Jf, bint[b, FA], bint[b, FB], params, bint[b, PPTR], r, Jr, row, want_jacobian,
                         x.shape[0], E9)
