@@ -53,7 +53,7 @@ def drop_stale_entries(package: Path = PACKAGE, stamp: Path = STAMP) -> int:
 
 def cold(package: Path = PACKAGE) -> bool:
     """Whether none of the package's compiled code is cached yet (a fresh install, or sources changed since the
-    cache was stamped): the first solves then compile it, 1-2 minutes on 2 cores. ``False`` where the package's
+    cache was stamped): the first solves then compile it, about 3 minutes on 2 cores. ``False`` where the package's
     folder cannot be written (numba caches elsewhere then, and this cannot tell)."""
     if not os.access(package, os.W_OK):
         return False

@@ -61,8 +61,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: The commands that solve (and so run compiled code).
 SOLVING = ("run", "bench", "reach")
-COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), 1-2 minutes "
-             "on 2 cores; later runs load them from the cache")
+COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), about 3 "
+             "minutes on 2 cores; later runs load them from the cache")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
