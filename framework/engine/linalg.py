@@ -145,13 +145,7 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
             for p in range(m):
                 s -= Jr[p, i] * r[p]
             g[i] = s
-            for j in range(i + 1):
-                t = 0.0
-                for p in range(m):
-                    t += Jr[p, i] * Jr[p, j]
-                A[i, j] = t
-                A[j, i] = t
-            A[i, i] += damping
+        gram(Jr.T, damping, A)  # JᵀJ + λI: the Gram matrix of Jᵀ's rows
         return _cholesky_solve(A, g, L, dx)
     for i in range(n):
         g[i] = 0.0
