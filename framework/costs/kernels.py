@@ -48,14 +48,9 @@ YES, NO = np.bool_(True), np.bool_(False)
 ROW0 = np.int64(0)
 
 
-@numba.njit(cache=True)
-def workspace(kin, prog, n):
-    """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
-    ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
-    scratch (:func:`~framework.costs.collision_blocks.scratch_size`, at least ``k``: it holds the frames whose
-    Jacobians a call needs, before the blocks use it) — as ``(buffer, ws)``: one allocation and the workspace
-    ``ws`` carved from it (views without an owner: the caller keeps ``buffer`` alive while it uses them, see
-    :func:`~framework.native.keep_alive`; a ``reshape`` per view cost a fifth of a microsecond more)."""
+@numba.njit(cache=True, inline="always")
+def _workspace_sizes(kin, prog, n):
+    """The seven sizes of :func:`workspace`'s views, in order."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
@@ -63,12 +58,12 @@ def workspace(kin, prog, n):
         rows += bint[b, ROWS]
     rows = max(rows, 1)
     k, J = fslot.shape[0], jint.shape[0]
-    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, max(scratch_size(bint, prog[2]), k))
-    total = 0
-    for size in sizes:
-        total += size
-    buffer = np.empty(total)
-    a = 0
+    return (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, max(scratch_size(bint, prog[2]), k)), k, J, rows
+
+
+@numba.njit(cache=True, inline="always")
+def _carve_workspace(buffer, a, sizes, k, J, rows, n):
+    """A workspace's seven views of ``buffer`` from entry ``a`` on (see :func:`workspace`)."""
     out = carve(buffer, a, (k, 12))
     a += sizes[0]
     W = carve(buffer, a, (J, 12))
@@ -81,7 +76,35 @@ def workspace(kin, prog, n):
     a += sizes[4]
     L3 = carve(buffer, a, (3, 3))
     E9 = carve(buffer, a + 9, sizes[6])
-    return buffer, (out, W, Jf, r, Jr, L3, E9)
+    return out, W, Jf, r, Jr, L3, E9
+
+
+@numba.njit(cache=True)
+def workspace(kin, prog, n):
+    """Scratch for one configuration — poses ``(k, 12)``, joint placements ``(J, 12)``, frame Jacobians
+    ``(k, 6, n)``, residual rows ``(rows,)`` and their Jacobian ``(rows, n)``, a 3 x 3 matrix and the blocks'
+    scratch (:func:`~framework.costs.collision_blocks.scratch_size`, at least ``k``: it holds the frames whose
+    Jacobians a call needs, before the blocks use it) — as ``(buffer, ws)``: one allocation and the workspace
+    ``ws`` carved from it (views without an owner: the caller keeps ``buffer`` alive while it uses them, see
+    :func:`~framework.native.keep_alive`; a ``reshape`` per view cost a fifth of a microsecond more)."""
+    sizes, k, J, rows = _workspace_sizes(kin, prog, n)
+    total = 0
+    for size in sizes:
+        total += size
+    buffer = np.empty(total)
+    return buffer, _carve_workspace(buffer, 0, sizes, k, J, rows, n)
+
+
+@numba.njit(cache=True)
+def workspace_pair(kin, prog, n):
+    """Two :func:`workspace`\ s (a point's and a trial point's) from one allocation: ``(buffer, ws, trial)``."""
+    sizes, k, J, rows = _workspace_sizes(kin, prog, n)
+    total = 0
+    for size in sizes:
+        total += size
+    buffer = np.empty(2 * total)
+    return buffer, _carve_workspace(buffer, 0, sizes, k, J, rows, n), _carve_workspace(buffer, total, sizes, k, J,
+                                                                                        rows, n)
 
 
 @numba.njit(cache=True)

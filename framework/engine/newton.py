@@ -78,6 +78,7 @@ from ..costs.kernels import (
     task_errors,
     term_values,
     workspace,
+    workspace_pair,
 )
 from ..native import borrow, borrow_kin, borrow_prog, carve, keep_alive, matrix, square
 from .clock import monotonic_ns
@@ -662,7 +663,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     chain_ptr, chain_idx = prog[5], prog[6]
-    (own_cur, cur), (own_tri, tri) = workspace(kin, prog, n), workspace(kin, prog, n)
+    own_cur, cur, tri = workspace_pair(kin, prog, n)
     big = _max_rows(prog)
     mq = m + q  # task rows, then regularizer rows (held at zero) in the active set
     nb = prog[0].shape[0]
@@ -1016,7 +1017,7 @@ def regularize(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterations, 
     task_errors(prog, cur[3], errors)
     term_values(x, prog, cur, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri, own, own_ints, own_flags, state, own_near)
+    keep_alive(own_cur, own, own_ints, own_flags, state, own_near)
     return status
 
 
@@ -1060,7 +1061,7 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
     chain_ptr, chain_idx = prog[5], prog[6]
-    (own_cur, cur), (own_tri, tri) = workspace(kin, prog, n), workspace(kin, prog, n)
+    own_cur, cur, tri = workspace_pair(kin, prog, n)
     linearize(x, TASK_AND_REGULARIZERS, kin, prog, cur, YES, COMPUTE)
     evaluations = 1
     g, H = np.empty(n), np.empty((n, n))
@@ -1133,7 +1134,7 @@ def weighted_newton(x, lower, upper, box_wrap, kin, prog, smoothing, max_iterati
                 status = STALLED
                 break
     stats[0], stats[1], stats[2] = iterations, evaluations, accepted
-    keep_alive(own_cur, own_tri)
+    keep_alive(own_cur)
     return status
 
 

@@ -39,7 +39,7 @@ import numba
 import numpy as np
 
 from ..costs.blocks import KIND, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS, is_contact, is_hinge
-from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace
+from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors, term_values, within_tolerance, workspace_pair
 from ..native import borrow, borrow_kin, borrow_prog, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
@@ -152,15 +152,16 @@ def draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x) -> int:
 
 @numba.njit(cache=True)
 def without_contacts(bint):
-    """A copy of the block table ``bint`` with the collision blocks (``SPHERES``, ``SOLIDS``) of the task taken out
-    of it (level 0: no level selects them), and whether there were any."""
-    lazy = bint.copy()
-    found = False
+    """The block table ``bint`` with the collision blocks (``SPHERES``, ``SOLIDS``) of the task taken out of it
+    (level 0: no level selects them; a copy, or ``bint`` itself when it has none), and whether there were any."""
     for b in range(bint.shape[0]):
         if bint[b, LEVEL] == LEVEL_TASK and is_contact(bint[b, KIND]):
-            lazy[b, LEVEL] = 0
-            found = True
-    return lazy, found
+            lazy = bint.copy()
+            for c in range(b, bint.shape[0]):
+                if bint[c, LEVEL] == LEVEL_TASK and is_contact(bint[c, KIND]):
+                    lazy[c, LEVEL] = 0
+            return lazy, True
+    return bint, False
 
 
 @numba.njit(cache=True)
@@ -227,7 +228,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     n = x.shape[0]
     kin, prog = borrow_kin(kin), borrow_prog(prog)
     x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
-    (own_ws, ws), (own_trial, trial) = workspace(kin, prog, n), workspace(kin, prog, n)
+    own_ws, ws, trial = workspace_pair(kin, prog, n)
     lazy_bint, has_contacts = without_contacts(prog[0])
     lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
     lazy = has_contacts  # the descent sees the blocks without the contact rows first
@@ -238,7 +239,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
     full = rows_of(prog, TASK)
     k = min(full, n)
-    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n)  # one allocation, carved into the scratch arrays
+    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n + 2)  # one allocation, carved into the scratch arrays
     scratch = borrow(own)
     A, L = scratch[: k * k], scratch[k * k : 2 * k * k]  # flat: damped_step shapes them
     a = 2 * k * k
@@ -250,7 +251,8 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     Jc_all = scratch[a : a + full * n]
     Jc = Jc_all[: m * n].reshape((m, n))
     e = squared_norm(ws[3], m)
-    best_e = np.full(2, np.inf)  # their ‖r‖², each in its own view
+    best_e = scratch[a + full * n : a + full * n + 2]  # their ‖r‖², each in its own view
+    best_e[0] = best_e[1] = np.inf
     best_e[int(lazy)], best[int(lazy)] = e, x
     damping, checkpoint, since = DAMPING_START, e, 0
     iterations, evaluations, restarted = 0, 1 + drew, 0
@@ -342,5 +344,5 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
         task_errors(prog, ws[3], errors)
     term_values(x, prog, ws, values)
     stats[0], stats[1], stats[2] = iterations, evaluations, restarted
-    keep_alive(own_ws, own_trial, own)
+    keep_alive(own_ws, own)
     return status
