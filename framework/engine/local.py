@@ -161,12 +161,14 @@ def solve_local(
     if drawn and not task_rows:  # no descent to draw it
         x = draws(rng, lower, upper, 1)[0]
     else:
-        x = np.empty(n) if drawn else np.array(x0, dtype=float)
+        # (a float array's own copy method: np.array's dtype keyword costs 0.2 µs per solve)
+        x = np.empty(n) if drawn else x0.copy() if type(x0) is np.ndarray and x0.dtype is _FLOAT \
+            else np.array(x0, dtype=float)
         if x.shape != (n,):
             raise SolverError(f"local engine: the start must be {n} joint coordinates; got shape {x.shape}")
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
-    deadline_ns = _nanoseconds(deadline)
+    deadline_ns = 0 if deadline is None else int(deadline * 1e9)  # (_nanoseconds, written out)
     stats = np.zeros(3, dtype=np.int64)
     errors = np.empty(layout.task_tolerances.size)
     values = np.zeros(len(program.terms))
@@ -196,6 +198,8 @@ def solve_local(
 
 #: The stream's dtype (a restart stream is checked against it).
 _STREAM = np.dtype(np.uint64)
+#: The dtype of a start :func:`solve_local` copies as it is.
+_FLOAT = np.dtype(np.float64)
 #: Random restarts of a descent that may restart (:attr:`LocalSettings.max_restarts`).
 _RESTARTS = 2**62
 _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_iterations"}
