@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import ConfigurationError, TaskError
 from ..robot import JointKind, Robot
+from ..validate import float_copy
 from . import blocks as B
 from .kernels import population_cost, population_values, task_errors_at
 
@@ -229,7 +230,7 @@ class Program:
         layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
         packed = layout.packed_terms
         if len(packed) == 1:  # a copy: the program's own
-            params = np.array(terms[packed[0]].parameters(robot), dtype=float)
+            params = float_copy(terms[packed[0]].parameters(robot))
         else:
             flat = [terms[k].parameters(robot) for k in packed]
             params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
