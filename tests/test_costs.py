@@ -245,6 +245,31 @@ def _curvature(program, x, mu):
     return H
 
 
+def test_a_workspace_pair_is_two_disjoint_workspaces_each_linearizing_as_one_alone(robot, rng):
+    """The engine's point and trial workspaces, carved from one allocation: the views of a lone workspace's shapes,
+    no byte shared between the two, and each gives a lone workspace's residuals and Jacobians (bit for bit) while the
+    other is written."""
+    from framework.costs.kernels import COMPUTE, TASK, YES, linearize, workspace, workspace_pair
+
+    program = Program(robot, fw.Objective(tuple((1.0, t) for t in all_terms(robot, 3))))
+    kin, prog = program.kin, program.prog
+    own, ws = workspace(kin, prog, robot.n)
+    own_pair, first, second = workspace_pair(kin, prog, robot.n)
+    assert own_pair.size == 2 * own.size
+    for a, b, lone in zip(first, second, ws):
+        assert a.shape == b.shape == lone.shape
+    assert not any(np.shares_memory(a, b) for a in first for b in second)
+    x, y = rng.uniform(robot.lower, robot.upper, size=(2, robot.n))
+    rows = linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
+    assert linearize(x, TASK, kin, prog, first, YES, COMPUTE) == rows
+    linearize(y, TASK, kin, prog, second, YES, COMPUTE)  # the other one written at another configuration
+    for k in (0, 2):  # poses, frame Jacobians
+        np.testing.assert_array_equal(first[k], ws[k])
+    for k in (3, 4):  # the task's residual rows and their Jacobian (the rows after them are the regularizers')
+        np.testing.assert_array_equal(first[k][:rows], ws[k][:rows])
+    assert rows > 0 and not np.array_equal(first[3][:rows], second[3][:rows])
+
+
 # ---------------------------------------------------------------------- bad input
 
 

@@ -299,3 +299,22 @@ def test_solvers_are_made_once_per_options_and_bad_options_still_raise():
     first, again = (solve(problem, "hybrid", seed=2, options={"stall": 8}) for _ in range(2))
     np.testing.assert_array_equal(first.configuration, again.configuration)
     assert first.settings["stall"] == 8
+
+
+def test_float_copy_gives_an_own_native_float64_array_of_any_input():
+    """The copy a solve makes of a start, a target's parameters and its answer: always a new float64 array of the same
+    values and shape (C-contiguous), whatever the input's dtype, byte order or strides — checked against numpy."""
+    from framework.validate import float_copy
+
+    rng = np.random.default_rng(5)
+    a = rng.normal(size=(4, 6))
+    for given in (a, a[:, ::2], a.T, a.astype(">f8"), a.astype(np.float32), [[1, 2], [3, 4]], (0.5, 1.5)):
+        made = float_copy(given)
+        expected = np.array(given, dtype=float)
+        assert made.dtype == np.float64 and made.dtype.isnative and made.flags.c_contiguous
+        assert made.shape == expected.shape and np.array_equal(made, expected)
+        if isinstance(given, np.ndarray):
+            assert not np.shares_memory(made, given)
+    made = float_copy(a)
+    made[0, 0] += 1.0  # the copy is the caller's own
+    assert made[0, 0] != a[0, 0]
