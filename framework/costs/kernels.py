@@ -97,7 +97,8 @@ def workspace(kin, prog, n):
 
 @numba.njit(cache=True)
 def workspace_pair(kin, prog, n):
-    """Two :func:`workspace`\ s (a point's and a trial point's) from one allocation: ``(buffer, ws, trial)``."""
+    """Two workspaces (:func:`workspace`: a point's and a trial point's) from one allocation:
+    ``(buffer, ws, trial)``."""
     sizes, k, J, rows = _workspace_sizes(kin, prog, n)
     total = 0
     for size in sizes:
