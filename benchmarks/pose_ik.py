@@ -13,7 +13,8 @@ driver builds its solver once per chain and calls it per pose, which is this var
 answers (same seed, same start); only the time differs. Which of the two solves a chunk first alternates.
 The poses are cut into chunks; each chunk is solved by TRAC-IK (a separate process, its own timing), then by
 metaik, so the machine's load drift hits both alike; each solves its chunk in a tight loop (no checking between
-solves, which costs the next solve cold caches). Every answer is checked afterwards with Pinocchio FK of the
+solves, which costs the next solve cold caches), its wall clock around the solve alone (the process CPU clock read
+before it starts and after it stops, as TRAC-IK's driver reads it). Every answer is checked afterwards with Pinocchio FK of the
 full model: *strict success* = position error ≤ 1e-5 m AND rotation angle ≤ 1e-5 rad, within 5 ms (a solve that
 overruns counts as a failure; times are over all poses, failures included). TRAC-IK runs at eps = 1e-5/√3: its
 own test is per twist component, and that is the setting whose test implies the strict one.
