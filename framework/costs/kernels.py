@@ -50,7 +50,7 @@ ROW0 = np.int64(0)
 
 @numba.njit(cache=True, inline="always")
 def _workspace_sizes(kin, prog, n):
-    """The seven sizes of :func:`workspace`'s views, in order."""
+    """The seven sizes of :func:`workspace`'s views, in order, and their sum."""
     jint, fslot = kin[0], kin[2]
     bint = prog[0]
     rows = 0
@@ -58,7 +58,11 @@ def _workspace_sizes(kin, prog, n):
         rows += bint[b, ROWS]
     rows = max(rows, 1)
     k, J = fslot.shape[0], jint.shape[0]
-    return (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, max(scratch_size(bint, prog[2]), k)), k, J, rows
+    sizes = (12 * k, 12 * J, 6 * k * n, rows, rows * n, 9, max(scratch_size(bint, prog[2]), k))
+    total = 0
+    for size in sizes:
+        total += size
+    return sizes, total, k, J, rows
 
 
 @numba.njit(cache=True, inline="always")
@@ -87,10 +91,7 @@ def workspace(kin, prog, n):
     Jacobians a call needs, before the blocks use it) — as ``(buffer, ws)``: one allocation and the workspace
     ``ws`` carved from it (views without an owner: the caller keeps ``buffer`` alive while it uses them, see
     :func:`~framework.native.keep_alive`; a ``reshape`` per view cost a fifth of a microsecond more)."""
-    sizes, k, J, rows = _workspace_sizes(kin, prog, n)
-    total = 0
-    for size in sizes:
-        total += size
+    sizes, total, k, J, rows = _workspace_sizes(kin, prog, n)
     buffer = np.empty(total)
     return buffer, _carve_workspace(buffer, 0, sizes, k, J, rows, n)
 
@@ -99,10 +100,7 @@ def workspace(kin, prog, n):
 def workspace_pair(kin, prog, n):
     """Two workspaces (:func:`workspace`: a point's and a trial point's) from one allocation:
     ``(buffer, ws, trial)``."""
-    sizes, k, J, rows = _workspace_sizes(kin, prog, n)
-    total = 0
-    for size in sizes:
-        total += size
+    sizes, total, k, J, rows = _workspace_sizes(kin, prog, n)
     buffer = np.empty(2 * total)
     return buffer, _carve_workspace(buffer, 0, sizes, k, J, rows, n), _carve_workspace(buffer, total, sizes, k, J,
                                                                                         rows, n)
