@@ -21,7 +21,7 @@ import pinocchio as pin
 from .errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from .resources import data_dir
 from .floating import expand as expand_floating, floating_joints, with_floating_joints
-from .robot import JointKind, Robot, build_joints, default_bounds
+from .robot import JointKind, Robot, build_joints, default_bounds, override_bounds
 from .validate import names, table
 
 if sys.version_info >= (3, 11):
@@ -212,6 +212,8 @@ def robot_from_urdf(
         raise UnknownJointError(f"{what} has no movable joint: there is nothing to solve (a free-flying body is "
                                 "solved with floating_base=True)")
     lower, upper = default_bounds(model, robot_joints, translation=unbounded_translation)
+    if bounds:  # before the robot checks them: an override may be what makes a URDF's empty range usable
+        lower, upper = override_bounds(lower, upper, bounds, robot_joints, name)
     if end_effectors is None:
         end_effectors = _leaf_frames(model, robot_joints)
     robot = Robot(
@@ -228,7 +230,7 @@ def robot_from_urdf(
         mimics=mimics,
     )
     robot = _with_groups(robot, groups, strict=strict_groups)
-    return robot.with_bounds(bounds) if bounds else robot
+    return robot
 
 
 def mimic_joints(root: ET.Element, what: str = "URDF") -> dict[str, tuple[str, float, float]]:

@@ -135,7 +135,7 @@ class Robot:
         upper = np.asarray(self.upper, dtype=float)
         object.__setattr__(self, "lower", lower)
         object.__setattr__(self, "upper", upper)
-        check_bounds(lower, upper, self.coordinate_names)
+        check_bounds(lower, upper, self.coordinate_names, remedy=EMPTY_BOUNDS_REMEDY)
         lower.flags.writeable = False
         upper.flags.writeable = False
         middle = 0.5 * (lower + upper)
@@ -232,13 +232,7 @@ class Robot:
 
     def with_bounds(self, bounds: Mapping[str, tuple[float, float]]) -> Robot:
         """A copy with new search bounds for some coordinates (by coordinate or joint name)."""
-        lower, upper = self.lower.copy(), self.upper.copy()
-        for name, (lo, hi) in bounds.items():
-            if name in self.coordinate_names:
-                idx = [self.coordinate_names.index(name)]
-            else:
-                idx = list(self.joint(name).coordinates)
-            lower[idx], upper[idx] = lo, hi
+        lower, upper = override_bounds(self.lower, self.upper, bounds, self.joints, self.name)
         return replace(self, lower=lower, upper=upper)
 
     def random_configurations(self, rng: np.random.Generator, count: int) -> np.ndarray:
@@ -392,19 +386,52 @@ class Robot:
         )
 
 
-def check_bounds(lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> None:
-    """Raise :class:`LimitsError` unless ``lower < upper`` elementwise, both finite, shape ``(len(names),)``."""
+#: What :class:`Robot` adds when its search bounds are empty somewhere.
+EMPTY_BOUNDS_REMEDY = (" (a URDF <limit> without lower and upper means [0, 0]); lock those joints (locked={name: "
+                       "value}) or give their bounds (bounds={name: (lower, upper)})")
+
+
+def check_bounds(lower: np.ndarray, upper: np.ndarray, names: Sequence[str], *, what: str = "search bounds",
+                 remedy: str = "") -> None:
+    """Raise :class:`LimitsError` unless ``lower < upper`` elementwise, both finite, shape ``(len(names),)``.
+
+    Empty ranges (``lower == upper``) are named all at once, followed by ``remedy``: a robot's search bounds give
+    the ways out (:data:`EMPTY_BOUNDS_REMEDY`; a URDF ``<limit>`` without ``lower`` / ``upper`` declares
+    ``[0, 0]``, the format's defaults, which real files do for joints that turn freely, wheels among them)."""
     if lower.shape != (len(names),) or upper.shape != (len(names),):
         raise LimitsError(f"bounds must have shape ({len(names)},); got {lower.shape} and {upper.shape}")
+    empty = []
     for i, name in enumerate(names):
         lo, hi = lower[i], upper[i]
         if not (np.isfinite(lo) and np.isfinite(hi)):
-            raise LimitsError(f"search bounds of {name!r} are not finite ({lo}, {hi}); set them explicitly")
-        if not lo < hi:
-            raise LimitsError(
-                f"search bounds of {name!r} are inverted or empty: lower {lo} >= upper {hi}"
-                + ("; lock the joint instead" if lo == hi else "")
-            )
+            raise LimitsError(f"{what} of {name!r} are not finite ({lo}, {hi}); set them explicitly")
+        if lo == hi:
+            empty.append((name, float(lo)))
+        elif not lo < hi:
+            raise LimitsError(f"{what} of {name!r} are inverted: lower {lo} > upper {hi}")
+    if empty:
+        listed = ", ".join(f"{name!r} [{lo:g}, {lo:g}]" for name, lo in empty)
+        raise LimitsError(f"{what} of {len(empty)} coordinate{'s' if len(empty) > 1 else ''} are empty: {listed}"
+                          + remedy)
+
+
+def override_bounds(lower: np.ndarray, upper: np.ndarray, bounds: Mapping[str, tuple[float, float]],
+                    joints: Sequence[Joint], robot: str) -> tuple[np.ndarray, np.ndarray]:
+    """Copies of the search bounds ``lower, upper`` ``(n,)`` with ``bounds`` (coordinate or joint name ->
+    ``(lower, upper)`` [rad or m]) written over them; an unknown name raises :class:`UnknownJointError`."""
+    lower, upper = np.array(lower, dtype=float), np.array(upper, dtype=float)
+    coordinates = [name for j in joints for name in _coordinate_names(j)]
+    for name, (lo, hi) in bounds.items():
+        if name in coordinates:
+            idx = [coordinates.index(name)]
+        else:
+            joint = next((j for j in joints if j.name == name), None)
+            if joint is None:
+                raise UnknownJointError(f"robot {robot!r} has no solved joint {name!r}"
+                                        f"{_suggest(name, [j.name for j in joints])}")
+            idx = list(joint.coordinates)
+        lower[idx], upper[idx] = lo, hi
+    return lower, upper
 
 
 def build_joints(

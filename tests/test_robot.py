@@ -106,6 +106,28 @@ def test_bounds_override_and_default_bounds_of_unbounded_joints():
         robot.with_bounds({"twist": (1.0, -1.0)})
 
 
+def test_empty_urdf_limits_are_named_together_and_bounds_or_locks_make_the_robot_usable(rng):
+    # a <limit> without lower/upper declares [0, 0] (URDF's defaults), as real files do for wheels
+    text = PLANAR_URDF.replace('lower="-2" upper="2" ', "").replace('lower="-0.2" upper="0.5" ', "")
+    with pytest.raises(fw.LimitsError) as raised:
+        fw.robot_from_urdf(text)
+    message = str(raised.value)
+    assert "2 coordinates are empty" in message and "'slide'" in message and "'twist'" in message
+    assert "locked=" in message and "bounds=" in message
+    # the override is applied before the robot checks its bounds
+    robot = fw.robot_from_urdf(text, bounds={"twist": (-1.0, 1.5), "slide": (0.0, 0.4)})
+    assert (robot.lower[3], robot.upper[3], robot.lower[4], robot.upper[4]) == (0.0, 0.4, -1.0, 1.5)
+    reference = fw.robot_from_urdf(PLANAR_URDF)  # the same kinematics, other bounds
+    x = reference.random_configurations(rng, 5)
+    np.testing.assert_allclose(robot.frame_poses(x).positions, reference.frame_poses(x).positions, atol=1e-12)
+    locked = fw.robot_from_urdf(text, locked={"slide": 0.1}, bounds={"twist": (-1.0, 1.0)})
+    assert locked.joint_names == ("base", "twist")
+    with pytest.raises(fw.UnknownJointError, match="did you mean 'twist'"):
+        fw.robot_from_urdf(text, bounds={"twists": (-1.0, 1.0)})
+    with pytest.raises(fw.LimitsError, match="'twist' are inverted"):  # an inverted override is still refused
+        fw.robot_from_urdf(text, bounds={"twist": (1.0, -1.0), "slide": (0.0, 0.4)})
+
+
 def test_xacro_file_with_arguments(tmp_path):
     path = fw.resources.data_dir("robots") / "examples" / "two_link.urdf.xacro"
     short = fw.load_robot(path, xacro_args={"l1": "0.2", "l2": "0.1"})

@@ -43,7 +43,7 @@ class JointLimitPenalty(Term):
         return lower, upper
 
     def validate(self, robot: Robot) -> None:
-        check_bounds(*self.limits(robot), robot.coordinate_names)
+        check_bounds(*self.limits(robot), robot.coordinate_names, what="joint-limit penalty limits")
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         lower, upper = self.limits(robot)
