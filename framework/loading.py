@@ -267,9 +267,21 @@ def _reduce(
     mimic: Mapping[str, tuple[str, float, float]] | None = None,
 ) -> tuple[pin.Model, dict[str, float]]:
     """Lock every joint not in ``joints`` (and every joint in ``locked``) with Pinocchio's reduced model; a mimic
-    joint is kept when its leader is solved and locked with it otherwise."""
+    joint is kept when its leader is solved and locked with it otherwise (one whose leader the model does not move
+    only where ``locked`` gives its value)."""
     mimic = dict(mimic or {})
     names = list(full.names)[1:]
+    # a coupling to a joint the model does not move (a name the file lacks, a fixed joint) cannot be kept: such a
+    # follower loads only locked at a value the user gives (the file as it is, its broken couplings named)
+    broken = {name: leader for name, (leader, _, _) in mimic.items() if leader not in names}
+    unlocked = [name for name in broken if name not in locked]
+    if unlocked:
+        listed = ", ".join(f"{name!r} mimics {broken[name]!r}" for name in unlocked)
+        raise RobotFileError(f"{len(unlocked)} joint{'s' if len(unlocked) > 1 else ''} mimic a joint that is not a "
+                             f"movable joint of the model: {listed}; lock {'them' if len(unlocked) > 1 else 'it'} "
+                             "(locked={name: value}) to load the file as it is")
+    for name in broken:
+        del mimic[name]
     fixed = {f.name for f in full.frames if f.type == pin.FrameType.FIXED_JOINT}
     for joint in [*(joints or []), *locked]:
         if joint in fixed:
@@ -278,9 +290,6 @@ def _reduce(
             raise UnknownJointError(f"the model has no joint {joint!r}; joints: {', '.join(names)}")
         if joint in mimic:
             raise UnknownJointError(f"joint {joint!r} mimics {mimic[joint][0]!r}: solve or lock {mimic[joint][0]!r}")
-    for name, (leader, _, _) in mimic.items():
-        if leader not in names:
-            raise RobotFileError(f"joint {name!r} mimics {leader!r}, which is not a movable joint of the model")
     if joints is not None:
         if not list(joints):
             raise UnknownJointError(f"joints=[] leaves nothing to solve; joints: {', '.join(names)}")

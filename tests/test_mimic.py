@@ -82,3 +82,36 @@ def test_mimic_joints_are_not_solved_or_locked_by_name(pr2, erd):
     free[common] = locked.middle
     np.testing.assert_allclose(tip.translation, pr2.frame_placement(free, "l_gripper_r_finger_tip_link").translation,
                                atol=1e-12)
+
+
+BROKEN_MIMIC_URDF = """<robot name="broken_mimic">
+  <link name="base"/><link name="upper"/><link name="lower"/><link name="tip"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="lower"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/>
+    <mimic joint="ghost" multiplier="2"/></joint>
+  <joint name="wrist" type="revolute"><parent link="lower"/><child link="tip"/>
+    <origin xyz="0.2 0 0"/><axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/>
+    <mimic joint="elbow"/></joint>
+</robot>"""
+
+
+def test_a_mimic_of_a_joint_the_model_lacks_is_named_and_loads_locked(rng):
+    """A file whose <mimic> names a joint it does not have (example-robot-data's alex_psyonic_hands.urdf does) is
+    refused with every such follower named (here 'wrist' through 'elbow'); locking them loads it as it is, the
+    locked values where the file's kinematics put them (Pinocchio's FK of the full model)."""
+    with pytest.raises(fw.RobotFileError, match=r"2 joints mimic .*'elbow' mimics 'ghost'.*'wrist' mimics 'ghost'"
+                                                r".*locked="):
+        fw.robot_from_urdf(BROKEN_MIMIC_URDF)
+    with pytest.raises(fw.RobotFileError, match=r"1 joint mimic.*'wrist' mimics 'ghost'; lock it"):
+        fw.robot_from_urdf(BROKEN_MIMIC_URDF, locked={"elbow": 0.4})
+    robot = fw.robot_from_urdf(BROKEN_MIMIC_URDF, locked={"elbow": 0.4, "wrist": -0.7})
+    assert robot.joint_names == ("shoulder",) and not robot.mimics
+    full = pin.buildModelFromXML(BROKEN_MIMIC_URDF)
+    data = full.createData()
+    for shoulder in rng.uniform(-2, 2, 5):
+        q = np.array([shoulder, 0.4, -0.7])
+        pin.framesForwardKinematics(full, data, q)
+        np.testing.assert_allclose(robot.frame_placement(np.array([shoulder]), "tip").homogeneous,
+                                   data.oMf[full.getFrameId("tip")].homogeneous, atol=1e-12)
