@@ -81,10 +81,20 @@ class RobotShape:
         always: configurations sampled (seeded) to find the pairs in contact in every one of them — geometries
             overlapping by construction (two links meeting at a wrist), which no configuration separates; they are
             not checked, as MoveIt's setup assistant disables them. 0 keeps them.
+        disabled: pairs of link names not checked, as an SRDF's ``<disable_collisions link1 link2>`` (without
+            writing one).
+        free_at: configurations ``(n,)`` or ``(k, n)`` declared collision-free: the pairs in contact at any of
+            them are not checked (MoveIt's "default" rule, which real files need where their collision geometry
+            overlaps at the robot's own rest pose: iCub's thighs and torso in example-robot-data; not applied
+            unasked, since in other files such a pose is a real contact — the DH youBot folded at zero).
+
+    Attributes:
+        unchecked: why pairs that could collide are not checked — ``"always"``, ``"disabled"``, ``"free_at"``
+            (the SRDF's and adjacent bodies' aside) — each a tuple of geometry-name pairs.
     """
 
     def __init__(self, robot: Robot, *, srdf: str | Path | None = None, package_dirs: Sequence[str | Path] = (),
-                 always: int = 50):
+                 always: int = 50, disabled: Sequence[tuple[str, str]] = (), free_at: np.ndarray | None = None):
         self.robot = robot
         folders = [str(p) for p in package_dirs]
         if robot.source:
@@ -110,8 +120,26 @@ class RobotShape:
         self.geometry = geometry
         self._data = model.createData()
         self._geometry_data = geometry.createData()
+        self.unchecked: dict[str, tuple[tuple[str, str], ...]] = {}
+        if disabled:
+            links = self._pair_links()
+            named = set()
+            for pair in disabled:
+                if not (isinstance(pair, (tuple, list)) and len(pair) == 2):
+                    raise TaskError(f"a disabled collision pair is two link names; got {pair!r}")
+                for link in pair:
+                    robot.frame_id(link)  # (raises naming close matches)
+                named.add(frozenset(pair))
+            self._drop("disabled", [frozenset(ab) in named for ab in links])
         if always > 0:
             self._remove_always_colliding(always)
+        if free_at is not None:
+            X = robot.check_population(free_at, "free_at configuration")
+            contact = np.zeros(len(geometry.collisionPairs), dtype=bool)
+            for x in X:
+                pin.computeCollisions(model, self._data, geometry, self._geometry_data, robot.to_pinocchio(x), False)
+                contact |= np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
+            self._drop("free_at", contact)
         self._covers: dict[tuple, SphereCover] = {}
         self._margined: dict[tuple[int, float], tuple[pin.GeometryModel, pin.GeometryData]] = {}
         self._hulls: dict[int, object] = {}
@@ -130,8 +158,24 @@ class RobotShape:
             always &= np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
             if not always.any():
                 return
-        for k in sorted(np.flatnonzero(always), reverse=True):
-            self.geometry.removeCollisionPair(self.geometry.collisionPairs[int(k)])
+        self._drop("always", always)
+
+    def _pair_links(self) -> list[tuple[str, str]]:
+        """The link (frame) names of each checked pair's two geometries."""
+        objects, frames = self.geometry.geometryObjects, self.robot.model.frames
+        return [(frames[objects[p.first].parentFrame].name, frames[objects[p.second].parentFrame].name)
+                for p in self.geometry.collisionPairs]
+
+    def _drop(self, reason: str, mask: Sequence[bool]) -> None:
+        """Stop checking the pairs where ``mask`` is true, recorded in :attr:`unchecked` under ``reason``."""
+        objects, pairs = self.geometry.geometryObjects, self.geometry.collisionPairs
+        dropped = [int(k) for k in np.flatnonzero(np.asarray(mask, dtype=bool))]
+        if not dropped:
+            return
+        self.unchecked[reason] = self.unchecked.get(reason, ()) + tuple(
+            (objects[pairs[k].first].name, objects[pairs[k].second].name) for k in dropped)
+        for k in reversed(dropped):
+            self.geometry.removeCollisionPair(pairs[k])
         self._geometry_data = self.geometry.createData()
 
     def cover(self, *, per_geometry: int = 4, max_radius: float | None = 0.08, samples: int = 1500,

@@ -65,6 +65,43 @@ def test_panda_srdf_pairs_are_not_checked(erd):
         RobotShape(robot, srdf=path.parent / "none.srdf")
 
 
+def test_panda_pairs_disabled_in_code_equal_its_srdf(erd):
+    """``disabled=`` link pairs leave out exactly what an SRDF listing them does."""
+    path = erd / "panda_description" / "urdf" / "panda.urdf"
+    srdf = erd / "panda_description" / "srdf" / "panda.srdf"
+    robot = fw.load_robot(path)
+    listed = re.findall(r'link1="([^"]+)"\s+link2="([^"]+)"', srdf.read_text())
+    in_code = RobotShape(robot, disabled=listed)
+    assert set(in_code.pairs) == set(RobotShape(robot, srdf=srdf).pairs)
+    assert len(in_code.unchecked["disabled"]) == len(RobotShape(robot).pairs) - len(in_code.pairs) > 0
+    with pytest.raises(fw.UnknownFrameError, match="did you mean 'panda_link5'"):
+        RobotShape(robot, disabled=[("panda_link1", "panda_link_5")])
+    with pytest.raises(fw.TaskError, match="two link names"):
+        RobotShape(robot, disabled=[("panda_link1",)])
+
+
+def test_pairs_in_contact_where_the_robot_is_declared_free_are_not_checked():
+    """The DH youBot arm's zero pose is folded: its link 3 and link 5 spheres overlap there (kept by default: a
+    real contact). ``free_at=zero`` leaves out exactly the pairs Pinocchio's own collision pass finds in contact at
+    zero, and nothing else; the check then finds zero clear."""
+    import pinocchio as pin
+
+    robot = fw.load_robot("youbot_arm")
+    zero = np.clip(np.zeros(robot.n), robot.lower, robot.upper)
+    every = RobotShape(robot)
+    assert every.check(zero).colliding and "free_at" not in every.unchecked
+    geometry, data = every.geometry, every.geometry.createData()
+    pin.computeCollisions(robot.model, robot.model.createData(), geometry, data, robot.to_pinocchio(zero), False)
+    objects = geometry.geometryObjects
+    touching = {(objects[p.first].name, objects[p.second].name)
+                for p, result in zip(geometry.collisionPairs, data.collisionResults) if result.isCollision()}
+    declared = RobotShape(robot, free_at=zero)
+    assert set(declared.unchecked["free_at"]) == touching and touching
+    assert set(declared.pairs) == set(every.pairs) - touching
+    assert not declared.check(zero).colliding
+    assert not RobotShape(robot, free_at=np.stack([zero, robot.middle])).check(robot.middle).colliding
+
+
 def test_no_collision_geometry_is_our_error():
     bare = re.sub(r"<collision>.*?</collision>", "", SPHERES, flags=re.S)
     with pytest.raises(RobotFileError, match="no <collision>"):
