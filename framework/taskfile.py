@@ -29,7 +29,10 @@ A task file reads top to bottom like the experiment it describes::
 
 **Collisions.** ``self_collision`` and ``obstacles`` terms (optional ``margin`` [m]) keep the robot's links apart
 and clear of the ``[[obstacles]]`` entries (``type = "box" | "sphere" | "capsule" | "plane" | "mesh"``, keys in
-:data:`framework.scene.TABLES`); ``[task] srdf`` names an SRDF whose disabled pairs are not checked::
+:data:`framework.scene.TABLES`); ``[task] srdf`` names an SRDF whose disabled pairs are not checked,
+``disabled_collisions = [["link_a", "link_b"], ...]`` lists more such pairs, and ``free_at`` (a configuration, or
+a list of them) declares poses collision-free: the pairs in contact there are not checked (see
+:class:`~framework.collision.RobotShape`)::
 
     [[obstacles]]
     type = "box"                          # a table
@@ -70,7 +73,7 @@ A case may carry its own ``trajectory`` table (``[cases.trajectory]``), which re
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -96,7 +99,8 @@ from .validate import check_table
 #: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
 TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
              "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
-             "bounds": "table", "package_dirs": "names", "floating_base": "bool", "srdf": "text"}
+             "bounds": "table", "package_dirs": "names", "floating_base": "bool", "srdf": "text",
+             "disabled_collisions": "list", "free_at": "list"}
 TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench", "obstacles"}
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
@@ -225,7 +229,8 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
     priorities = task.get("priorities", True)
     if not isinstance(priorities, bool):
         raise TaskError(f"[task] priorities must be true or false; got {priorities!r}")
-    world = _World(robot, path, task.get("srdf"), _tables(raw, "obstacles"))
+    world = _World(robot, path, task.get("srdf"), _tables(raw, "obstacles"), task.get("disabled_collisions", ()),
+                   task.get("free_at"))
     for i, case in enumerate(cases_raw):
         variables = {k: v for k, v in case.items() if k not in ("name", "trajectory")}
         name = str(case.get("name", f"case {i + 1}"))
@@ -294,16 +299,33 @@ class _World:
     """The robot's collision shape (built when a collision term first asks, once per task file) and the
     ``[[obstacles]]`` scene."""
 
-    def __init__(self, robot: Robot, path: Path, srdf: str | None, obstacles: list[dict]):
+    def __init__(self, robot: Robot, path: Path, srdf: str | None, obstacles: list[dict],
+                 disabled: Sequence = (), free_at: Sequence | None = None):
         self.robot, self.srdf = robot, None if srdf is None else path.parent / srdf
         self.scene = Scene.from_tables(obstacles, "[[obstacles]]", path.parent)
+        for pair in disabled:
+            if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(link, str) for link in pair)):
+                raise TaskError(f"[task] disabled_collisions holds pairs of link names; got {pair!r}")
+        self.disabled = [tuple(pair) for pair in disabled]
+        if free_at is not None and not _numeric(free_at):
+            raise TaskError(f"[task] free_at must be a configuration (a list of numbers) or a list of them; got "
+                            f"{free_at!r}")
+        self.free_at = None if free_at is None else robot.check_population(np.asarray(free_at, dtype=float),
+                                                                           "[task] free_at")
         self._shape: RobotShape | None = None
 
     @property
     def shape(self) -> RobotShape:
         if self._shape is None:
-            self._shape = RobotShape(self.robot, srdf=self.srdf)
+            self._shape = RobotShape(self.robot, srdf=self.srdf, disabled=self.disabled, free_at=self.free_at)
         return self._shape
+
+
+def _numeric(value: Sequence) -> bool:
+    """Whether ``value`` is a list of numbers or a list of such lists (TOML arrays)."""
+    rows = value if value and isinstance(value[0], list) else [value]
+    return all(isinstance(row, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in row)
+               for row in rows)
 
 
 def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray, world: _World) -> Objective:

@@ -258,6 +258,32 @@ type = "obstacles"
         load_task(tmp_path / "bad.toml")
 
 
+def test_task_file_disabled_collisions_and_free_at_reach_the_shape(tmp_path):
+    """``[task] disabled_collisions`` and ``free_at`` build the shape a collision term uses as RobotShape's own
+    arguments do; malformed values are named."""
+    zero = [0.0] * 5
+    head = """[task]
+robot = "youbot_arm"
+{extra}
+[[terms]]
+type = "self_collision"
+"""
+    (tmp_path / "task.toml").write_text(head.format(extra=f'disabled_collisions = [["link1_z", "link4_z"]]\nfree_at = {zero}'))
+    task = load_task(tmp_path / "task.toml")
+    shape = task.cases[0].problem.objective.terms[0][1].shape
+    robot = fw.load_robot("youbot_arm")
+    reference = fw.RobotShape(robot, disabled=[("link1_z", "link4_z")], free_at=np.clip(zero, robot.lower, robot.upper))
+    assert set(shape.pairs) == set(reference.pairs) and shape.unchecked == reference.unchecked
+    assert shape.unchecked["disabled"] and shape.unchecked["free_at"]
+    for extra, message in (('disabled_collisions = [["link1"]]', "pairs of link names"),
+                           ('free_at = ["zero"]', "free_at must be a configuration"),
+                           ("free_at = [0.0, 0.0]", "free_at"),
+                           ('disabled_collisions = "link1"', "must be a list")):
+        (tmp_path / "bad.toml").write_text(head.format(extra=extra))
+        with pytest.raises(fw.MetaikError, match=message):
+            load_task(tmp_path / "bad.toml").cases[0].problem
+
+
 def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, sphere_arm):
     """Every obstacle kind is a static entity of the recording, at its place; the sphere cover is drawn at the
     solution with its radii."""
