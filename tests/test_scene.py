@@ -121,6 +121,39 @@ def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(r
     assert _hinge_jacobian_matches_differences(robot, program, rng, 8) > 10
 
 
+def test_sphere_pair_curvature_matches_differences_on_the_mobile_dual_youbot(rng):
+    """μ ∇²r of each violated SPHERES row (the closest pair's distance: the Newton phase's Lagrangian curvature of a
+    held contact) against central differences of μ J_row, at random configurations (rows whose closest pair stays
+    the same within ±h; a trivial zero curvature misses by the rows' own curvature, ~1/‖v‖ on the Jacobian)."""
+    from framework.costs import blocks as B
+    from framework.costs.curvature import block_curvature
+    from framework.costs.kernels import linearize, workspace
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    program = Program(robot, 1.0 * fw.SelfCollision(fw.RobotShape(robot), margin=0.05))
+    bint = program.prog[0]
+    assert set(bint[:, B.ROWS]) == {1} and set(bint[:, B.LEVEL]) == {1}  # block b is row b
+    h, compared, largest = 1e-6, 0, 0.0
+    for x in robot.random_configurations(rng, 12):
+        r, _ = residuals(program, x)
+        own, ws = workspace(program.kin, program.prog, robot.n)
+        linearize(x, 1, program.kin, program.prog, ws, True, 1)
+        for b in np.flatnonzero((bint[:, B.KIND] == B.SPHERES) & (r < -1e-4)):
+            mu = rng.standard_normal()
+            H = np.zeros((robot.n, robot.n))
+            block_curvature(b, np.array([mu]), ws[0], ws[2], bint, program.prog[2], program.prog[3],
+                            program.prog[5], program.prog[6], ws[3], b, H)
+            plus = [residuals(program, x + e)[1][b] for e in np.eye(robot.n) * h]
+            minus = [residuals(program, x - e)[1][b] for e in np.eye(robot.n) * h]
+            fd = mu * (np.array(plus) - np.array(minus)) / (2 * h)  # row i: d(J_row)/dx_i
+            if np.abs(fd - fd.T).max() > 1e-4:
+                continue  # the closest pair switches within ±h: not a smooth row here
+            np.testing.assert_allclose(H, fd, atol=1e-5)
+            compared += 1
+            largest = max(largest, np.abs(fd).max())
+    assert compared >= 5 and largest > 1e-2
+
+
 def test_box_obstacle_solve_matches_a_brute_force_grid(sphere_arm):
     """Motion towards (π/4, π/4) with a box in the way of the forearm sphere: the feasible optimum found by
     the default solver equals the best point of a 601 x 601 grid that keeps the sphere clear (by the box's

@@ -40,31 +40,11 @@ def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) ->
     if gap >= 0.0:
         hinge_row(gap, r, Jr, row, want_jacobian, n)
         return
-    full = params[p + 11] != 0.0
-    qa = p + 12
-    qb = qa + 4 * na
-    qm = qb + 4 * nb
-    for j in range(nb):
-        S[3 * j], S[3 * j + 1], S[3 * j + 2] = world_point(out, fb, params, qb + 4 * j)
-    best, ai, bj = margin, -1, -1  # only pairs closer than the margin count
-    for i in range(na):
-        a0, a1, a2 = world_point(out, fa, params, qa + 4 * i)
-        ra = params[qa + 4 * i + 3]
-        if np.sqrt((a0 - B0) ** 2 + (a1 - B1) ** 2 + (a2 - B2) ** 2) - ra - RB >= best:
-            continue  # every sphere of b is at least this far
-        for j in range(nb):
-            if not full and params[qm + nb * i + j] == 0.0:
-                continue
-            reach = best + ra + params[qb + 4 * j + 3]  # a pair closer than best has ‖v‖ < reach
-            if reach <= 0.0:
-                continue
-            v0, v1, v2 = a0 - S[3 * j], a1 - S[3 * j + 1], a2 - S[3 * j + 2]
-            vv = v0 * v0 + v1 * v1 + v2 * v2
-            if vv < reach * reach:
-                best, ai, bj = np.sqrt(vv) - ra - params[qb + 4 * j + 3], i, j
+    best, ai, bj = closest_pair(out, fa, fb, params, p, margin, S)
     if not hinge_row(best - margin if ai >= 0 else 0.0, r, Jr, row, want_jacobian, n):
         return
-    q, s = qa + 4 * ai, qb + 4 * bj
+    qa = p + 12
+    q, s = qa + 4 * ai, qa + 4 * na + 4 * bj
     a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
     b0, b1, b2 = on_frame(out, fb, params[s], params[s + 1], params[s + 2])
     v0, v1, v2 = out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1, \
@@ -81,6 +61,39 @@ def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) ->
                       + u2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
                       + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i]
                       - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
+
+
+@numba.njit(cache=True, inline="always")
+def closest_pair(out, fa, fb, params, p, within, S):
+    """``(d, i, j)``: the sphere pair ``i`` of ``a``, ``j`` of ``b`` of the ``SPHERES`` block at ``params[p:]`` whose
+    gap ``d = ‖c_ai − c_bj‖ − r_ai − r_bj`` is smallest among those below ``within`` [m] (``(within, -1, -1)``: none),
+    ``a``'s spheres pruned by ``b``'s bounding sphere; ``b``'s world centres go to the scratch ``S``."""
+    na, nb = int(params[p]), int(params[p + 1])
+    B0, B1, B2 = world_point(out, fb, params, p + 7)
+    RB = params[p + 10]
+    full = params[p + 11] != 0.0
+    qa = p + 12
+    qb = qa + 4 * na
+    qm = qb + 4 * nb
+    for j in range(nb):
+        S[3 * j], S[3 * j + 1], S[3 * j + 2] = world_point(out, fb, params, qb + 4 * j)
+    best, ai, bj = within, -1, -1  # only pairs closer than ``within`` count
+    for i in range(na):
+        a0, a1, a2 = world_point(out, fa, params, qa + 4 * i)
+        ra = params[qa + 4 * i + 3]
+        if np.sqrt((a0 - B0) ** 2 + (a1 - B1) ** 2 + (a2 - B2) ** 2) - ra - RB >= best:
+            continue  # every sphere of b is at least this far
+        for j in range(nb):
+            if not full and params[qm + nb * i + j] == 0.0:
+                continue
+            reach = best + ra + params[qb + 4 * j + 3]  # a pair closer than best has ‖v‖ < reach
+            if reach <= 0.0:
+                continue
+            v0, v1, v2 = a0 - S[3 * j], a1 - S[3 * j + 1], a2 - S[3 * j + 2]
+            vv = v0 * v0 + v1 * v1 + v2 * v2
+            if vv < reach * reach:
+                best, ai, bj = np.sqrt(vv) - ra - params[qb + 4 * j + 3], i, j
+    return best, ai, bj
 
 
 @numba.njit(cache=True, inline="always")

@@ -7,7 +7,8 @@ import numba
 import numpy as np
 
 from .blocks import (AXIS, COM, CONE, COORDINATES, COUNT, DISTANCE, FA, FB, IPTR, KIND, LIMITS, LOOK_AT, ORIENTATION,
-                     PPTR, RELATIVE, RELATIVE_LOCAL, RELATIVE_ROTATION, SOLIDS, SPHERES, left_jacobian_inverse)
+                     PPTR, RELATIVE, RELATIVE_LOCAL, RELATIVE_ROTATION, SOLIDS, SPHERES, left_jacobian_inverse, on_frame)
+from .collision_blocks import closest_pair
 from .goal_blocks import axis_world, distance_direction
 
 
@@ -22,7 +23,10 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
     """
     kind = bint[b, KIND]
     if kind == COORDINATES or kind == LIMITS or kind == CONE or kind == RELATIVE_LOCAL or kind == RELATIVE_ROTATION \
-            or kind == LOOK_AT or kind == SPHERES or kind == SOLIDS:
+            or kind == LOOK_AT or kind == SOLIDS:
+        return
+    if kind == SPHERES:
+        _spheres_curvature(mu[0], out, Jf, bint[b, FA], bint[b, FB], params, bint[b, PPTR], chain_ptr, chain_idx, H)
         return
     if kind == COM:  # Σ_k m_k μ·∂²p_k, exact
         p, q, count = bint[b, PPTR], bint[b, IPTR], bint[b, COUNT]
@@ -92,6 +96,57 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
             continue
         sign = -1.0 if (kind == RELATIVE and which == 0) else 1.0
         _position_curvature(f, sign * mu[0], sign * mu[1], sign * mu[2], Jf, chain_ptr, chain_idx, H)
+
+
+#: How far beyond its margin [m] a sphere pair still counts as a ``SPHERES`` row's closest (its curvature is asked
+#: where the row is held on its boundary, the gap at the margin up to rounding).
+PAIR_BAND = 1e-3
+
+
+@numba.njit(cache=True)
+def _spheres_curvature(mu, out, Jf, fa, fb, params, p, chain_ptr, chain_idx, H) -> None:
+    """Add ``mu ∇²d`` of a ``SPHERES`` row to ``H``: ``d = ‖v‖ − r_a − r_b``, ``v = c_a − c_b`` between the closest
+    pair's centres (within :data:`PAIR_BAND` of the margin; none: nothing), ``∇²d = Dᵀ(I − uuᵀ)D/‖v‖ + Σ u_c ∇²v_c``
+    with ``D = D_a − D_b`` the centres' Jacobians (``J_p + ω × o``, ``o = R c``) and ``∇²`` of a point fixed on a
+    frame from the product of exponentials (as :func:`_position_curvature`, for a point off the frame's origin)."""
+    S = np.empty(3 * int(params[p + 1]))
+    gap, ai, bj = closest_pair(out, fa, fb, params, p, params[p + 2] + PAIR_BAND, S)
+    if ai < 0:
+        return
+    q = p + 12 + 4 * ai
+    s = p + 12 + 4 * int(params[p]) + 4 * bj
+    oa = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
+    ob = on_frame(out, fb, params[s], params[s + 1], params[s + 2])
+    v = np.empty(3)
+    for c in range(3):
+        v[c] = out[fa, 9 + c] + oa[c] - out[fb, 9 + c] - ob[c]
+    dist = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if dist <= 0.0:
+        return
+    u = v / dist
+    n = H.shape[0]
+    Da, Db = _point_jacobian(Jf, fa, oa, n), _point_jacobian(Jf, fb, ob, n)
+    _chain_curvature(fa, mu * u[0], mu * u[1], mu * u[2], Da, Jf, chain_ptr, chain_idx, H)
+    _chain_curvature(fb, -mu * u[0], -mu * u[1], -mu * u[2], Db, Jf, chain_ptr, chain_idx, H)
+    D = Da - Db
+    uD = u[0] * D[0] + u[1] * D[1] + u[2] * D[2]
+    k = mu / dist
+    for i in range(n):
+        for j in range(n):
+            H[i, j] += k * (D[0, i] * D[0, j] + D[1, i] * D[1, j] + D[2, i] * D[2, j] - uD[i] * uD[j])
+
+
+@numba.njit(cache=True)
+def _point_jacobian(Jf, f, o, n):
+    """``(3, n)``: the Jacobian ``J_p + ω × o`` of the point at offset ``o`` (world axes) from frame ``f``'s
+    origin."""
+    D = np.empty((3, n))
+    for i in range(n):
+        wx, wy, wz = Jf[f, 3, i], Jf[f, 4, i], Jf[f, 5, i]
+        D[0, i] = Jf[f, 0, i] + wy * o[2] - wz * o[1]
+        D[1, i] = Jf[f, 1, i] + wz * o[0] - wx * o[2]
+        D[2, i] = Jf[f, 2, i] + wx * o[1] - wy * o[0]
+    return D
 
 
 @numba.njit(cache=True)
