@@ -38,13 +38,14 @@ of mass, a mass-weighted mean of the joints' mass points (frames at their bodies
 are the block's ``idx`` entries, ``m_k`` the mass fractions), on the axes of a 0/1 mask (rows: the mask's sum).
 ``SPHERES``: two bodies kept ``m`` apart through spheres fixed on them — on frames ``a`` and ``b`` (the bodies'
 joint frames), centres ``c`` in those frames, radii ``r``, listed in pairs — by the closest pair: one row, a hinge,
-whose Jacobian is the closest pair's (it switches pairs as the bodies move, like any distance between unions).
+whose Jacobian is the closest pair's (it switches pairs as the bodies move, like any distance between unions), and so
+is its second order (:mod:`~.curvature`).
 Parameters: ``n_a, n_b, m``, each body's bounding sphere (centre in its frame, radius: 4 each), a flag (1: every
 pair of the two lists, 0: a 0/1 mask of the pairs follows the spheres), ``a``'s spheres and ``b``'s (centre,
 radius: 4 each), the mask (``n_a × n_b``, row-major).
 ``SOLIDS``: the spheres of frame ``a``'s body against one solid — a sphere, box, capsule or half-space
 (a row of :mod:`framework.solids`: a code, a rotation ``R`` and centre ``c``, dims) fixed in
-the world, or on frame ``b`` (a link's own box) — by the closest sphere. Parameters: the solid (16), ``m``, the
+the world, or on frame ``b`` (a link's own box) — by the closest sphere; its second order is left out. Parameters: the solid (16), ``m``, the
 count, the spheres' bounding sphere (4), the spheres (4 each).
 Both keep a collision term to one row per pair of bodies (or body and obstacle) however many spheres cover them.
 

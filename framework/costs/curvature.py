@@ -1,5 +1,6 @@
 """The second-order part of the blocks (the engine's Newton steps): ``Σ_c μ_c ∇²r_c`` of a block from the product of
-exponentials, exact for positions and for orientations on their target (see :func:`block_curvature`)."""
+exponentials, exact for positions and for orientations on their target (see :func:`block_curvature`); a collision
+row's is its closest sphere pair's (``SPHERES``; ``SOLIDS`` rows have none here)."""
 
 from __future__ import annotations
 
