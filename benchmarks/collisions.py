@@ -231,6 +231,9 @@ def tracking() -> list[str]:
                         ("paper000_circular_table", "with the table (tasks/paper000_circular_table.toml)")):
         task = load_task(report.ROOT / "tasks" / f"{name}.toml")
         case = task.cases[0]
+        warm = load_task(report.ROOT / "tasks" / f"{name}.toml", points=5)  # compiled code loaded (or compiled)
+        track(warm.robot, warm.cases[0].trajectory, warm.cases[0].builder, initial=warm.cases[0].initial,
+              tolerance=TOLERANCE)  # before the clock starts
         t = time.perf_counter()
         result = track(task.robot, case.trajectory, case.builder, initial=case.initial, tolerance=TOLERANCE)
         seconds = time.perf_counter() - t
