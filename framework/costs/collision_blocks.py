@@ -32,7 +32,7 @@ def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) ->
     far apart), and a sphere of ``a`` farther from ``b``'s bounding sphere than the closest pair found so far
     is skipped. ``b``'s world centres go to the scratch ``S`` (3 per sphere), each computed once.
     """
-    na, nb, margin = int(params[p]), int(params[p + 1]), params[p + 2]
+    na, margin = int(params[p]), params[p + 2]
     A0, A1, A2 = world_point(out, fa, params, p + 3)
     B0, B1, B2 = world_point(out, fb, params, p + 7)
     RA, RB = params[p + 6], params[p + 10]

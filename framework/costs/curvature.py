@@ -111,7 +111,7 @@ def _spheres_curvature(mu, out, Jf, fa, fb, params, p, chain_ptr, chain_idx, H) 
     with ``D = D_a − D_b`` the centres' Jacobians (``J_p + ω × o``, ``o = R c``) and ``∇²`` of a point fixed on a
     frame from the product of exponentials (as :func:`_position_curvature`, for a point off the frame's origin)."""
     S = np.empty(3 * int(params[p + 1]))
-    gap, ai, bj = closest_pair(out, fa, fb, params, p, params[p + 2] + PAIR_BAND, S)
+    _, ai, bj = closest_pair(out, fa, fb, params, p, params[p + 2] + PAIR_BAND, S)
     if ai < 0:
         return
     q = p + 12 + 4 * ai
