@@ -137,8 +137,7 @@ class RobotShape:
             X = robot.check_population(free_at, "free_at configuration")
             contact = np.zeros(len(geometry.collisionPairs), dtype=bool)
             for x in X:
-                pin.computeCollisions(model, self._data, geometry, self._geometry_data, robot.to_pinocchio(x), False)
-                contact |= np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
+                contact |= self._in_contact(x)
             self._drop("free_at", contact)
         self._covers: dict[tuple, SphereCover] = {}
         self._margined: dict[tuple[int, float], tuple[pin.GeometryModel, pin.GeometryData]] = {}
@@ -153,12 +152,16 @@ class RobotShape:
         rng = np.random.default_rng(0)
         always = np.ones(len(self.geometry.collisionPairs), dtype=bool)
         for x in self.robot.random_configurations(rng, samples):
-            pin.computeCollisions(self.robot.model, self._data, self.geometry, self._geometry_data,
-                                  self.robot.to_pinocchio(x), False)
-            always &= np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
+            always &= self._in_contact(x)
             if not always.any():
                 return
         self._drop("always", always)
+
+    def _in_contact(self, x: np.ndarray) -> np.ndarray:
+        """``bool (pairs,)``: which checked pairs coal's collision test finds in contact at ``x`` ``(n,)``."""
+        pin.computeCollisions(self.robot.model, self._data, self.geometry, self._geometry_data,
+                              self.robot.to_pinocchio(x), False)
+        return np.array([r.isCollision() for r in self._geometry_data.collisionResults], dtype=bool)
 
     def _pair_links(self) -> list[tuple[str, str]]:
         """The link (frame) names of each checked pair's two geometries."""

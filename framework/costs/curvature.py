@@ -82,13 +82,7 @@ def block_curvature(b, mu, out, Jf, bint, params, idx, chain_ptr, chain_idx, r, 
         for c in range(3):
             for i in range(n):
                 D[c, i] = Jf[fa, c, i] - (Jf[fb, c, i] if fb >= 0 else 0.0)
-        uD = np.zeros(n)
-        for i in range(n):
-            uD[i] = u[0] * D[0, i] + u[1] * D[1, i] + u[2] * D[2, i]
-        k = mu[0] / dist
-        for i in range(n):
-            for j in range(n):
-                H[i, j] += k * (D[0, i] * D[0, j] + D[1, i] * D[1, j] + D[2, i] * D[2, j] - uD[i] * uD[j])
+        _projected_curvature(mu[0] / dist, u, D, H)
         return
     frames = (bint[b, FA], bint[b, FB]) if kind == RELATIVE else (bint[b, FA], -1)
     for which in range(2):
@@ -129,9 +123,17 @@ def _spheres_curvature(mu, out, Jf, fa, fb, params, p, chain_ptr, chain_idx, H) 
     Da, Db = _point_jacobian(Jf, fa, oa, n), _point_jacobian(Jf, fb, ob, n)
     _chain_curvature(fa, mu * u[0], mu * u[1], mu * u[2], Da, Jf, chain_ptr, chain_idx, H)
     _chain_curvature(fb, -mu * u[0], -mu * u[1], -mu * u[2], Db, Jf, chain_ptr, chain_idx, H)
-    D = Da - Db
-    uD = u[0] * D[0] + u[1] * D[1] + u[2] * D[2]
-    k = mu / dist
+    _projected_curvature(mu / dist, u, Da - Db, H)
+
+
+@numba.njit(cache=True)
+def _projected_curvature(k, u, D, H) -> None:
+    """Add ``k Dᵀ(I − uuᵀ)D`` to ``H``: a distance ``‖v‖``'s curvature through its direction ``u`` (``D = ∂v``,
+    ``(3, n)``; ``k = μ / ‖v‖``)."""
+    n = H.shape[0]
+    uD = np.zeros(n)
+    for i in range(n):
+        uD[i] = u[0] * D[0, i] + u[1] * D[1, i] + u[2] * D[2, i]
     for i in range(n):
         for j in range(n):
             H[i, j] += k * (D[0, i] * D[0, j] + D[1, i] * D[1, j] + D[2, i] * D[2, j] - uD[i] * uD[j])
