@@ -176,6 +176,65 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
 
 
 @numba.njit(cache=True, inline="always")
+def _moves(Jr, i) -> bool:
+    """Whether column ``i`` of ``Jr`` has a nonzero entry (the rows depend on coordinate ``i`` here)."""
+    for a in range(Jr.shape[0]):
+        if Jr[a, i] != 0.0:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def moving_columns(Jr) -> int:
+    """How many columns of ``Jr (m, n)`` have a nonzero entry."""
+    count = 0
+    for i in range(Jr.shape[1]):
+        if _moves(Jr, i):
+            count += 1
+    return count
+
+
+@numba.njit(cache=True)
+def moving_columns_step(Jr, r, damping, A, L, g, dx, nz) -> bool:
+    """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)`` whose ``nz`` nonzero columns are the only ones solved
+    for (the others' coordinates do not move the rows: their ``dx`` is 0, as the damped system gives them): the
+    normal equations over those columns, ``A, L (nz, nz)`` and ``g (nz,)`` scratch, ``dx (n,)``. The same step as
+    :func:`least_norm_step` in exact arithmetic, but where the rows outnumber the coordinates that move them (a
+    full pose of a three-joint leg on a whole quadruped: six rows, three columns) ``J Jᵀ`` is singular and a
+    lightly damped least-norm step is lost to rounding, while ``JᵀJ`` over the moving columns is not."""
+    m, n = Jr.shape
+    p = 0
+    for i in range(n):
+        if not _moves(Jr, i):
+            continue
+        s = 0.0
+        for a in range(m):
+            s -= Jr[a, i] * r[a]
+        g[p] = s
+        q = 0
+        for j in range(i + 1):
+            if not _moves(Jr, j):
+                continue
+            s = 0.0
+            for a in range(m):
+                s += Jr[a, i] * Jr[a, j]
+            A[p, q] = s
+            A[q, p] = s
+            q += 1
+        A[p, p] += damping
+        p += 1
+    if not _cholesky_solve(A, g, L, dx[:nz]):
+        return False
+    for i in range(n - 1, -1, -1):  # scattered back in place: the p-th moving column's value moves up to i >= p
+        if _moves(Jr, i):
+            p -= 1
+            dx[i] = dx[p]
+        else:
+            dx[i] = 0.0
+    return True
+
+
+@numba.njit(cache=True, inline="always")
 def _reflect(V, beta, j, k, M, col) -> None:
     """Column ``col`` of ``M`` times the ``j``-th Householder reflection ``I − β_j v_j v_jᵀ`` (``v_j = V[j:k, j]``)."""
     s = 0.0

@@ -43,7 +43,7 @@ from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges
 from ..native import borrow, borrow_kin, borrow_prog, keep_alive, square
 from .clock import monotonic_ns
 from .draws import uniform_in_box
-from .linalg import least_norm_step, levenberg_marquardt_step
+from .linalg import least_norm_step, levenberg_marquardt_step, moving_columns, moving_columns_step
 
 #: Status codes of :func:`reach`.
 REACHED, ITERATIONS, DEADLINE, STARTS = 0, 1, 2, 3
@@ -90,11 +90,17 @@ def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     """The Levenberg-Marquardt step ``dx = −(JᵀJ + λI)⁻¹Jᵀr = −Jᵀ(JJᵀ + λI)⁻¹r``, in the smaller of the two
     systems (``A, L`` flat buffers of at least ``k²`` with ``k = min(m, n)``, ``y`` at least ``max(m, n)``; their
     leading parts are used, as contiguous ``(k, k)`` matrices: with ``[:k, :k]`` slices, strided, the step cost
-    a third more)."""
+    a third more). Where fewer columns than rows move the rows (``m < n`` coordinates, but at most ``m`` of them
+    nonzero columns: a full pose of a short limb on a whole robot, coordinates held at their bounds), ``J Jᵀ`` is
+    singular: the step is solved over the moving columns instead (:func:`~.linalg.moving_columns_step`; the same
+    step, without losing the last, lightly damped ones to rounding)."""
     m, n = Jr.shape
     k = min(m, n)
     Ak, Lk = square(A, k), square(L, k)
     if m < n:
+        nz = moving_columns(Jr)
+        if nz <= m:
+            return moving_columns_step(Jr, r, damping, square(A, nz), square(L, nz), y[:nz], dx, nz)
         return least_norm_step(Jr, r, damping, Ak, Lk, y[:k], dx)
     return levenberg_marquardt_step(Jr, r, damping, Ak, Lk, y[:k], dx)
 
