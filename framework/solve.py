@@ -163,7 +163,9 @@ def solve(
         seed: seed or generator; the same seed gives the same result.
         tolerance: success threshold of every position-like task term [m].
         angle_tolerance: success threshold of every orientation [rad] (default: ``tolerance``).
-        time_budget: seconds for the whole solve (the local engine checks it inside its loops).
+        time_budget: seconds for the whole solve (the local engine checks it inside its loops), counted once the
+            solver's compiled code is loaded (a process's first solve loads it from numba's disk cache, or
+            compiles it: that time is in ``wall_time``, not in the budget).
         max_iterations: iteration budget (metaheuristics: generations, default 1000; local engine:
             Levenberg-Marquardt iterations over all restarts, default 2000).
         population: candidates per iteration (metaheuristics; the hybrid's global phase).
@@ -176,9 +178,10 @@ def solve(
             hybrid); returning True stops. Recordings use it to trace every term.
     """
     start = time.perf_counter()
+    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
+    method.prepare(problem)  # its compiled code loaded before the time budget starts (a process's first solve)
     request = _request(problem, seed, tolerance, angle_tolerance, time_budget, max_iterations, population, initial,
                        stop_at_tolerance, callback, progress)
-    method = ik_solver(DEFAULT_SOLVER if solver is None else solver, options)
     return result_of(problem, method.solve(problem, request), method.name, request, start)
 
 

@@ -182,8 +182,7 @@ def solve_local(
     regularized = multipliers = None
     if reached and settings.regularize and program.has_regularizers:
         multipliers = np.zeros(task_rows)
-        args = (x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
-                settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
+        args = _regularize_args(program, x, settings, deadline_ns, multipliers, errors, values, stats)
         code = _entry(program, newton.regularize, args)(*args)
         regularized = regularized_status(code)
         evaluations += int(stats[1])
@@ -193,6 +192,35 @@ def solve_local(
     # (tuple.__new__: a named tuple's own __new__ is a Python call more per solve)
     return tuple.__new__(LocalResult, (x, reached, status, errors, iterations, evaluations, restarts, regularized,
                                        multipliers, values if not layout.generic else None))
+
+
+def _regularize_args(program: Program, x: np.ndarray, settings: LocalSettings, deadline_ns: int,
+                     multipliers: np.ndarray, errors: np.ndarray, values: np.ndarray, stats: np.ndarray) -> tuple:
+    """:func:`~.newton.regularize`'s arguments, as :func:`solve_local` passes them."""
+    return (x, program.robot.lower, program.robot.upper, program.layout.box_wrap, program.kin, program.prog,
+            settings.smoothing, settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
+
+
+#: :func:`prepare`'s run of the engine: no iteration, no Newton phase (it loads code, it solves nothing).
+_LOADING = LocalSettings(max_iterations=0, regularize=False)
+
+
+def prepare(program: Program) -> None:
+    """Load the engine's compiled code for ``program``'s layout, so that a time budget that starts after this is
+    not spent on it: numba loads the code from its disk cache (about half a second for the engine) or compiles it
+    (minutes, once per install) on a process's first call. Once per layout; then a dictionary lookup."""
+    entries = program.layout.entries
+    if prepare in entries:
+        return
+    program.refresh()
+    if program.task_rows:  # the reach loop, run without an iteration
+        solve_local(program, program.robot.middle, stream(0), _LOADING)
+    if program.has_regularizers:  # the Newton phase, resolved (not run: it needs a start on the task)
+        x = np.array(program.robot.middle)
+        _entry(program, newton.regularize, _regularize_args(
+            program, x, _LOADING, 0, np.zeros(program.task_rows), np.empty(program.layout.task_tolerances.size),
+            np.zeros(len(program.terms)), np.zeros(3, dtype=np.int64)))
+    entries[prepare] = None
 
 
 #: The stream's dtype (a restart stream is checked against it).

@@ -99,6 +99,9 @@ class MFabrikSolver(IKSolver):
     reference = "paper 003 (M-FABRIK, Algorithm 1); Aristidou & Lasenby 2011 (FABRIK) for fixed bases"
     Options = MFabrikOptions
 
+    def prepare(self, problem) -> None:
+        """Nothing ahead of a solve: M-FABRIK takes no time budget (see :meth:`IKSolver.prepare`)."""
+
     def solve(self, problem, request: Request) -> Outcome:
         if request.deadline is not None or request.callback is not None:
             raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")

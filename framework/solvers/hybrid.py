@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalResult, LocalSettings, minimize_sum, minimize_weighted, reaching_is_optimal, solve_local
+from ..engine import prepare as prepare_engine
 from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
@@ -107,6 +108,13 @@ class Hybrid(IKSolver):
                                   weighted=False, hull_runs=0, on_hulls=False, clear_first=False, population=None)
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
         self._basin: dict[LocalSettings, LocalSettings] = {}  # their warm-start variants (_in_basin's table)
+
+    def prepare(self, problem) -> None:
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`; its mark tested here: this
+        runs before every solve)."""
+        program = problem.program
+        if prepare_engine not in program.layout.entries:
+            prepare_engine(program)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase

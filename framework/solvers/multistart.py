@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import LocalSettings, solve_local
+from ..engine import prepare as prepare_engine
 from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
 from .registry import register_ik
 
@@ -96,6 +97,13 @@ class MultistartLM(IKSolver):
     def __init__(self, options=None):
         super().__init__(options)
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
+
+    def prepare(self, problem) -> None:
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`; its mark tested here: this
+        runs before every solve)."""
+        program = problem.program
+        if prepare_engine not in program.layout.entries:
+            prepare_engine(program)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, start = start_configuration(problem, request, self.options.warm_start)
