@@ -49,7 +49,7 @@ def test_the_step_over_moving_columns_is_the_damped_step_and_survives_where_j_jt
         J = np.zeros((m, n))
         moving = np.sort(rng.choice(n, size=nz, replace=False))
         J[:, moving] = rng.normal(size=(m, nz))
-        assert moving_columns(J) == nz
+        assert moving_columns(J, n) == nz and moving_columns(J, nz - 1) == nz and moving_columns(J, 0) == 1
         r = rng.normal(size=m)
         damping = float(10.0 ** rng.uniform(-6, 0))
         dx = np.empty(n)

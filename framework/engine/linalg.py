@@ -184,13 +184,15 @@ def _moves(Jr, i) -> bool:
     return False
 
 
-@numba.njit(cache=True)
-def moving_columns(Jr) -> int:
-    """How many columns of ``Jr (m, n)`` have a nonzero entry."""
+@numba.njit(cache=True, inline="always")
+def moving_columns(Jr, beyond) -> int:
+    """How many columns of ``Jr (m, n)`` have a nonzero entry, counted until there are more than ``beyond``."""
     count = 0
     for i in range(Jr.shape[1]):
         if _moves(Jr, i):
             count += 1
+            if count > beyond:
+                break
     return count
 
 
