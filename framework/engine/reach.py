@@ -24,6 +24,10 @@ every iteration, so a time budget is kept to within one iteration (a few µs). T
 FK-sampled poses per arm (UR5, Panda, Baxter), the damping rule on 1,500 per arm (Puma 560 too; see
 :data:`DAMPING_START`), none of them benchmarks/pose_ik.py's.
 
+After the tolerance is met, up to ``polish`` Gauss-Newton steps take the residual to rounding level: projected on
+the box (coordinates a step carries through their bounds are moved onto them, the rest solved again:
+:func:`projected_step`), and taken again damped at a floor where ``JᵀJ`` is singular (:data:`POLISH_FLOOR`).
+
 Contact rows are taken lazily: each start first descends without the collision blocks (``SPHERES``, ``SOLIDS``,
 the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
 blocks are evaluated, and only if one is violated does the descent go on with every block, from there. Most
@@ -136,6 +140,44 @@ def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> 
         for a in range(m):
             Jc[a, i] = Jr[a, i] if keep else 0.0
     return damped_step(Jc, r, damping, A, L, y, dx)
+
+
+@numba.njit(cache=True)
+def projected_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, pins, A, L, y, dx) -> bool:
+    """:func:`bounded_step`, then, while the step carries coordinates through their bounds, those moved onto the
+    bounds and the step solved again for the others (with the pinned moves' effect ``J_i (b_i − x_i)`` added to
+    the residual): a Gauss-Newton step projected on the box, where a clipped one is a partial step (a polish near
+    a whole body's limits converged linearly, 3 steps leaving ``1e-7``). ``pins`` scratch of ``m + n``."""
+    if not bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx):
+        return False
+    m, n = Jr.shape
+    rp, side = pins[:m], pins[m : m + n]  # the residual with the pinned moves; -1 / +1: pinned at lower / upper
+    side[:] = 0.0
+    for _ in range(n):
+        new = False
+        for i in range(n):
+            if side[i] == 0.0 and not box_wrap[i]:
+                t = x[i] + dx[i]
+                if t < lower[i] or t > upper[i]:
+                    side[i] = -1.0 if t < lower[i] else 1.0
+                    new = True
+        if not new:
+            return True
+        for a in range(m):
+            s = r[a]
+            for i in range(n):
+                if side[i] != 0.0:
+                    s += Jr[a, i] * ((lower[i] if side[i] < 0.0 else upper[i]) - x[i])
+                    Jc[a, i] = 0.0
+                else:
+                    Jc[a, i] = Jr[a, i]
+            rp[a] = s
+        if not damped_step(Jc, rp, damping, A, L, y, dx):
+            return False
+        for i in range(n):
+            if side[i] != 0.0:
+                dx[i] = (lower[i] if side[i] < 0.0 else upper[i]) - x[i]
+    return True
 
 
 @numba.njit(cache=True)
@@ -261,7 +303,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
     full = rows_of(prog, TASK)
     k = min(full, n)
-    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n + 2)  # one allocation, carved into the scratch arrays
+    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n + 2 + full + n)  # one allocation, carved into the scratch
     scratch = borrow(own)
     A, L = scratch[: k * k], scratch[k * k : 2 * k * k]  # flat: damped_step shapes them
     a = 2 * k * k
@@ -275,6 +317,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     e = squared_norm(ws[3], m)
     best_e = scratch[a + full * n : a + full * n + 2]  # their ‖r‖², each in its own view
     best_e[0] = best_e[1] = np.inf
+    pins = scratch[a + full * n + 2 : a + full * n + 2 + full + n]  # the polish's projected steps' scratch
     best_e[int(lazy)], best[int(lazy)] = e, x
     damping, checkpoint, since = DAMPING_START, e, 0
     iterations, evaluations, restarted = 0, 1 + drew, 0
@@ -352,7 +395,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
                     if e <= ROUNDED:
                         break
                     lam = max(lam, POLISH_FLOOR * squared_entries(ws[4], m) / n)
-                if not bounded_step(x, ws[4][:m], ws[3][:m], lam, lower, upper, box_wrap, Jc, A, L, y, dx):
+                if not projected_step(x, ws[4][:m], ws[3][:m], lam, lower, upper, box_wrap, Jc, pins, A, L, y, dx):
                     continue
                 for i in range(n):
                     xt[i] = x[i] + dx[i]
