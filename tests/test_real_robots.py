@@ -126,6 +126,19 @@ def test_a_free_flyer_without_joints_is_solved_as_a_floating_base(erd):
         "arm_right_1_link": 8, "head_1_link": 2}
 
 
+def _solve_full_poses(robot, tips, count: int, seed: int, within: float, label: str = "") -> None:
+    """Full poses of the frames ``tips`` at once, from the FK of ``count`` random configurations (numpy seed
+    ``seed``), each solved with seed ``k``: a success, and every pose within ``within`` m and rad by Pinocchio's FK."""
+    for k, x in enumerate(robot.random_configurations(np.random.default_rng(seed), count)):
+        targets = {tip: robot.frame_placement(x, tip) for tip in tips}
+        result = fw.solve(fw.Problem(robot, [(1.0, fw.Pose(tip, M)) for tip, M in targets.items()]), seed=k)
+        assert result.success, (label, k, result.errors)
+        for tip, M in targets.items():
+            error = pin.log6(M.inverse() * robot.frame_placement(result.configuration, tip))
+            assert np.linalg.norm(error.linear) <= within and np.linalg.norm(error.angular) <= within, \
+                (label, k, tip, error)
+
+
 def _deepest_body_frames(model: pin.Model, roots: int, count: int) -> list[str]:
     """Body frames at the ends of the ``count`` longest joint chains of distinct limbs (a limb: the first joint
     after the ``roots`` joints of a floating base), longest first."""
@@ -178,14 +191,7 @@ def test_every_example_robot_data_urdf_loads_and_solves_or_is_refused_by_name(er
         robot = fw.load_robot(erd / name, floating_base=True)
         tips = _deepest_body_frames(robot.model, 6, 4)
         assert len(tips) >= 3, (name, tips)
-        x = robot.random_configurations(np.random.default_rng(8), 1)[0]
-        targets = {tip: robot.frame_placement(x, tip) for tip in tips}
-        result = fw.solve(fw.Problem(robot, [(1.0, fw.Pose(tip, M)) for tip, M in targets.items()]), seed=0,
-                          time_budget=0.5)
-        assert result.success, (name, result.errors)
-        for tip, M in targets.items():
-            error = pin.log6(M.inverse() * robot.frame_placement(result.configuration, tip))
-            assert np.linalg.norm(error.linear) <= 1e-6 and np.linalg.norm(error.angular) <= 1e-6, (name, tip, error)
+        _solve_full_poses(robot, tips, 1, 8, 1e-6, name)
 
 
 def test_a_full_pose_of_one_leg_of_a_whole_quadruped_is_solved_to_machine_precision(erd):
@@ -193,13 +199,7 @@ def test_a_full_pose_of_one_leg_of_a_whole_quadruped_is_solved_to_machine_precis
     are solved over the moving columns, where ``J Jᵀ`` is singular, so the polish reaches rounding level — by
     Pinocchio's FK, every answer within 1e-12 m and rad (before, 8 of these 10 ended between 6e-12 and 6e-7:
     within the tolerance, the polish lost to rounding)."""
-    robot = fw.load_robot(erd / "go1_description" / "urdf" / "go1.urdf")
-    for k, x in enumerate(robot.random_configurations(np.random.default_rng(7), 10)):
-        target = robot.frame_placement(x, "FL_calf")
-        result = fw.solve(fw.Problem(robot, fw.Pose("FL_calf", target)), seed=k)
-        error = pin.log6(target.inverse() * robot.frame_placement(result.configuration, "FL_calf"))
-        assert result.success and np.linalg.norm(error.linear) <= 1e-12 and np.linalg.norm(error.angular) <= 1e-12, \
-            (k, error)
+    _solve_full_poses(fw.load_robot(erd / "go1_description" / "urdf" / "go1.urdf"), ("FL_calf",), 10, 7, 1e-12)
 
 
 def test_poses_whose_columns_are_dependent_are_polished_to_machine_precision(erd):
@@ -209,14 +209,7 @@ def test_poses_whose_columns_are_dependent_are_polished_to_machine_precision(erd
     and rad by Pinocchio's FK (before, all 8 of these ended between 1e-11 and 6e-7: within the tolerance, the
     polish lost to rounding)."""
     robot = fw.load_robot(erd / "tiago_description" / "robots" / "tiago_no_hand.urdf", floating_base=True)
-    tips = ("arm_7_link", "wheel_left_link", "wheel_right_link")
-    for k, x in enumerate(robot.random_configurations(np.random.default_rng(2), 8)):
-        targets = {tip: robot.frame_placement(x, tip) for tip in tips}
-        result = fw.solve(fw.Problem(robot, [(1.0, fw.Pose(tip, M)) for tip, M in targets.items()]), seed=k)
-        assert result.success, (k, result.errors)
-        for tip, M in targets.items():
-            error = pin.log6(M.inverse() * robot.frame_placement(result.configuration, tip))
-            assert np.linalg.norm(error.linear) <= 1e-12 and np.linalg.norm(error.angular) <= 1e-12, (k, tip, error)
+    _solve_full_poses(robot, ("arm_7_link", "wheel_left_link", "wheel_right_link"), 8, 2, 1e-12)
 
 
 def test_whole_body_poses_near_joint_limits_are_polished_to_machine_precision(erd):
@@ -226,11 +219,4 @@ def test_whole_body_poses_near_joint_limits_are_polished_to_machine_precision(er
     answer is within 1e-12 m and rad by Pinocchio's FK (before, 2 of these 12 ended at 1.2e-7 and 6.6e-9: a
     clipped step converges linearly, and three polish steps were not enough)."""
     robot = fw.load_robot(erd / "human_description" / "robots" / "human.urdf", floating_base=True)
-    tips = ("left_hand", "left_foot", "right_foot")
-    for k, x in enumerate(robot.random_configurations(np.random.default_rng(2), 12)):
-        targets = {tip: robot.frame_placement(x, tip) for tip in tips}
-        result = fw.solve(fw.Problem(robot, [(1.0, fw.Pose(tip, M)) for tip, M in targets.items()]), seed=k)
-        assert result.success, (k, result.errors)
-        for tip, M in targets.items():
-            error = pin.log6(M.inverse() * robot.frame_placement(result.configuration, tip))
-            assert np.linalg.norm(error.linear) <= 1e-12 and np.linalg.norm(error.angular) <= 1e-12, (k, tip, error)
+    _solve_full_poses(robot, ("left_hand", "left_foot", "right_foot"), 12, 2, 1e-12)
