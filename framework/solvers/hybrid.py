@@ -110,11 +110,8 @@ class Hybrid(IKSolver):
         self._basin: dict[LocalSettings, LocalSettings] = {}  # their warm-start variants (_in_basin's table)
 
     def prepare(self, problem) -> None:
-        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`; its mark tested here: this
-        runs before every solve)."""
-        program = problem.program
-        if prepare_engine not in program.layout.entries:
-            prepare_engine(program)
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`)."""
+        prepare_engine(problem.program)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase

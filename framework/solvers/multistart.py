@@ -99,11 +99,8 @@ class MultistartLM(IKSolver):
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
 
     def prepare(self, problem) -> None:
-        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`; its mark tested here: this
-        runs before every solve)."""
-        program = problem.program
-        if prepare_engine not in program.layout.entries:
-            prepare_engine(program)
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`)."""
+        prepare_engine(problem.program)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan:
         x0, start = start_configuration(problem, request, self.options.warm_start)
