@@ -301,6 +301,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
     drew = max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1) if drawn else 0
     project(x, lower, upper, box_wrap)
     m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+    Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]  # the rows at x and at a trial (views kept)
     full = rows_of(prog, TASK)
     k = min(full, n)
     own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n + 2 + full + n)  # one allocation, carved into the scratch
@@ -330,6 +331,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
                 break
             lazy, cur = False, prog  # the rest is met: the contact rows now; the descent goes on with them
             m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+            Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]
             Jc = Jc_all[: m * n].reshape((m, n))
             evaluations += 1
             e = squared_norm(ws[3], m)
@@ -344,8 +346,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             break
         iterations += 1
         accepted = False
-        if bounded_step(x, ws[4][:m], ws[3][:m], damping * (e if landing else np.sqrt(e)), lower, upper, box_wrap,
-                        Jc, A, L, y, dx):
+        if bounded_step(x, Jw, rw, damping * (e if landing else np.sqrt(e)), lower, upper, box_wrap, Jc, A, L, y, dx):
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
@@ -354,11 +355,10 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             et = squared_norm(trial[3], m)
             if et < e:
                 accepted = True
-                factor = LANDING_DAMPING_DOWN if landing else \
-                    gain_factor(e, et, ws[4][:m], ws[3][:m], x, xt, dx, box_wrap)
+                factor = LANDING_DAMPING_DOWN if landing else gain_factor(e, et, Jw, rw, x, xt, dx, box_wrap)
                 damping = max(damping * factor, DAMPING_MIN)
                 linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
-                ws, trial = trial, ws
+                ws, trial, Jw, rw, Jt, rt = trial, ws, Jt, rt, Jw, rw
                 x[:] = xt
                 e = et
                 if e < best_e[int(lazy)]:
@@ -377,6 +377,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             restarted += 1
             lazy, cur = has_contacts, lazy_prog if has_contacts else prog  # without the contact rows first, again
             m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
+            Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]
             Jc = Jc_all[: m * n].reshape((m, n))
             e = squared_norm(ws[3], m)
             if e < best_e[int(lazy)]:
