@@ -350,14 +350,16 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
             for i in range(n):
                 xt[i] = x[i] + dx[i]
             project(xt, lower, upper, box_wrap)
-            linearize(xt, TASK, kin, cur, trial, NO, COMPUTE)  # poses only: most rejected steps end here
+            # poses only where most steps are rejected (landing); elsewhere most are accepted: the Jacobians too
+            linearize(xt, TASK, kin, cur, trial, NO if landing else YES, COMPUTE)
             evaluations += 1
             et = squared_norm(trial[3], m)
             if et < e:
                 accepted = True
                 factor = LANDING_DAMPING_DOWN if landing else gain_factor(e, et, Jw, rw, x, xt, dx, box_wrap)
                 damping = max(damping * factor, DAMPING_MIN)
-                linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
+                if landing:
+                    linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
                 ws, trial, Jw, rw, Jt, rt = trial, ws, Jt, rt, Jw, rw
                 x[:] = xt
                 e = et
