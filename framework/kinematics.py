@@ -18,6 +18,7 @@ import numpy as np
 
 from .errors import ConfigurationError, UnknownFrameError
 from .native import borrow, keep_alive
+from .trig import sincos
 from .joints import JointKind
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -193,7 +194,7 @@ def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
         o = W[j]
         q = g[15] * x[i] + g[16]  # the joint's value (a mimic joint's from its leader's coordinate)
         if kind == 0 and code > 0:  # revolute about a principal axis: rotate two columns of A
-            c, s = np.cos(q), np.sin(q)
+            s, c = sincos(q)
             if code > 3:
                 s, code = -s, code - 3
             if code == 3:  # z: columns 0, 1
@@ -218,7 +219,7 @@ def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[11] = pz + a20 * ux + a21 * uy + a22 * uz
             continue
         if kind == 0:  # revolute: Rodrigues, M = c I + s [u]x + (1 - c) u uᵀ
-            c, s = np.cos(q), np.sin(q)
+            s, c = sincos(q)
             ux, uy, uz = g[12], g[13], g[14]
             v = 1.0 - c
             m00, m01, m02 = c + v * ux * ux, v * ux * uy - s * uz, v * ux * uz + s * uy
@@ -226,7 +227,7 @@ def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             m20, m21, m22 = v * uz * ux - s * uy, v * uz * uy + s * ux, c + v * uz * uz
         else:  # planar: translate (x, y, 0) in the joint frame, rotate about z
             tx, ty = x[i], x[i + 1]
-            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+            s, c = sincos(x[i + 2])
             px += a00 * tx + a01 * ty
             py += a10 * tx + a11 * ty
             pz += a20 * tx + a21 * ty
@@ -334,7 +335,7 @@ def frame_jacobian(f, x, jint, jgeo, fslot, out, W, J):
         w = W[j]
         ux, uy, uz, m = jgeo[j, 12], jgeo[j, 13], jgeo[j, 14], jgeo[j, 15]
         if kind == 2:  # planar: x, y along the pre-motion frame A's axes, θ about its z
-            c, s = np.cos(x[i + 2]), np.sin(x[i + 2])
+            s, c = sincos(x[i + 2])
             for r in range(3):
                 J[f, r, i] = c * w[3 * r] - s * w[3 * r + 1]
                 J[f, r, i + 1] = s * w[3 * r] + c * w[3 * r + 1]

@@ -63,6 +63,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..trig import sincos
+
 # Block kinds
 (POSITION, ORIENTATION, RELATIVE, COORDINATES, LIMITS, AXIS, DISTANCE, CONE, RELATIVE_LOCAL, RELATIVE_ROTATION,
  LOOK_AT, COM, SPHERES, SOLIDS) = range(14)
@@ -147,7 +149,8 @@ def left_jacobian_inverse(r, L):
     if theta < 1e-4:
         k = 1.0 / 12.0 + t2 / 720.0
     else:
-        k = 1.0 / t2 - 0.5 / (theta * np.tan(0.5 * theta))
+        sh, ch = sincos(0.5 * theta)
+        k = 1.0 / t2 - 0.5 * ch / (theta * sh)  # cot(θ/2) = cos / sin
     # [r]×² = r rᵀ − θ² I
     for a in range(3):
         for b in range(3):
@@ -202,7 +205,7 @@ def rho_value(rho, scale, r, row, rows) -> float:
         return scale * s
     norm = np.sqrt(s)
     if rho == HALFSIN:
-        return scale * np.sin(0.5 * min(norm, np.pi))
+        return scale * sincos(0.5 * min(norm, np.pi))[0]
     return scale * norm
 
 
@@ -246,8 +249,8 @@ def rho_derivatives(rho, scale, r, row, rows, smoothing, g, H, majorize_below=0.
         return
     # HALFSIN: ρ = s sin(φ/2), φ = ‖r‖ (smoothed): ∇ρ = ½ s cos(φ/2) u, ∇²ρ = s[½cos(φ/2)/φ (I − uuᵀ) − ¼ sin(φ/2) uuᵀ]
     phi = np.sqrt(s + smoothing * smoothing)
-    c1 = 0.5 * scale * np.cos(0.5 * phi)
-    c2 = 0.25 * scale * np.sin(0.5 * phi)
+    sh, ch = sincos(0.5 * phi)
+    c1, c2 = 0.5 * scale * ch, 0.25 * scale * sh
     for a in range(rows):
         ua = r[row + a] / phi
         g[a] = c1 * ua
