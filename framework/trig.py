@@ -1,9 +1,9 @@
 """Sine and cosine of one angle at once, inlined into compiled kernels.
 
 Forward kinematics takes a sine and a cosine per revolute joint at every evaluation: on a 6-joint arm that was a
-tenth of a Levenberg-Marquardt iteration through libm's calls (24.7 ns per pair when the angles are independent,
+tenth of a Levenberg-Marquardt iteration through libm's calls (24.6 ns per pair when the angles are independent,
 as a chain's joint angles are; measured on this project's 2-core AMD EPYC), where the same pair computed inline
-costs 8.6 ns — the calls cannot overlap, inline arithmetic can.
+costs 9.0 ns — the calls cannot overlap, inline arithmetic can.
 
 :func:`sincos` is fdlibm's (Sun Microsystems, 1993; the algorithm of most C libraries): the angle reduced by the
 nearest multiple ``n`` of π/2 with π/2 split in two parts (Cody & Waite: ``n·p₁`` exact for ``|n| < 2²⁰``, the
