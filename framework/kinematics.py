@@ -313,7 +313,7 @@ def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
         frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def frame_jacobians_where(x, jint, jgeo, fslot, out, W, J, need):
     """:func:`frame_jacobians` of the frames ``f`` with ``need[f] != 0`` only (``need (k,)``; the other frames'
     ``J[f]`` are left as they were)."""

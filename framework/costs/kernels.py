@@ -108,6 +108,13 @@ def workspace_pair(kin, prog, n):
 
 @numba.njit(cache=True)
 def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
+    """:func:`linearize_inline` as a call of its own: the form every caller takes but the reach loop's iteration,
+    which inlines it (a call passes the workspace's and the program's dozen arrays field by field, ~70 ns)."""
+    return linearize_inline(x, level, kin, prog, ws, want_jacobian, kinematics)
+
+
+@numba.njit(cache=True, inline="always")
+def linearize_inline(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     """Residuals (and Jacobians) of the blocks of ``level`` at ``x``, stacked into ``ws`` rows; returns the rows.
 
     ``level < 0`` selects every block of level 1 and 2 (the task and the regularizers). ``kinematics``:
@@ -242,7 +249,7 @@ def term_values(x, prog, ws, values):
         values[bint[b, TERM]] += rho_value(bint[b, RHO], bflt[b, SCALE], r, ROW0, rows)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def within_tolerance(prog, errors, tol_linear, tol_angular) -> bool:
     """Whether every task block's error (from :func:`task_errors`) is within its tolerance (m or rad)."""
     bint = prog[0]
@@ -259,7 +266,7 @@ def within_tolerance(prog, errors, tol_linear, tol_angular) -> bool:
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def task_errors(prog, r, errors):
     """Each task block's error ``‖r_b‖`` (m or rad) into ``errors``, from stacked task rows."""
     bint = prog[0]
