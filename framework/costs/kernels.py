@@ -108,8 +108,9 @@ def workspace_pair(kin, prog, n):
 
 @numba.njit(cache=True)
 def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
-    """:func:`linearize_inline` as a call of its own: the form every caller takes but the reach loop's iteration,
-    which inlines it (a call passes the workspace's and the program's dozen arrays field by field, ~70 ns)."""
+    """:func:`linearize_inline` as a call of its own: the form every caller takes but the reach loop's trial point,
+    which inlines it (a call passes the workspace's and the program's dozen arrays field by field, ~70 ns; each
+    inlined copy compiles every block kind's kernel again, ~50 s of a fresh install's first solve)."""
     return linearize_inline(x, level, kin, prog, ws, want_jacobian, kinematics)
 
 

@@ -93,7 +93,7 @@ def lu_solve(A, b, M, out) -> bool:
     return True
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def gram(Jr, damping, A):
     """``A = J Jᵀ + damping I`` for ``Jr (m, n)`` into ``A (m, m)``."""
     m, n = Jr.shape
@@ -130,7 +130,7 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
 DENSE_ROWS = 4
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
     """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)``; ``A, L (n, n)``, ``g (n,)`` scratch.
 

@@ -28,11 +28,13 @@ After the tolerance is met, up to ``polish`` Gauss-Newton steps take the residua
 the box (coordinates a step carries through their bounds are moved onto them, the rest solved again:
 :func:`projected_step`), and taken again damped at a floor where ``JᵀJ`` is singular (:data:`POLISH_FLOOR`).
 
-The iteration's helpers are inlined into the loop (``inline="always"``: the step, the gain ratio, the trial
-point's linearization with its FK and frame Jacobians): a call numba does not inline passes every array as its
-struct of fields, ~30-70 ns per call with the workspaces' dozen arrays, and the loop made ~10 calls per iteration.
-Inlined, fresh-Problem UR5 pose solves took 0.88-0.91x the time (mean 0.86-0.88x), Panda 0.94x, Baxter 0.91x,
-Puma 560 0.92x, the answers identical; inlining the rotation log and ``J_l⁻¹`` as well measured no better.
+The iteration's helpers are inlined into the loop (``inline="always"``: the bounded step, the gain ratio, the box
+projection, the task errors, and the trial point's linearization with its frame Jacobians): a call numba does not
+inline passes every array as its struct of fields, ~30-70 ns per call with the workspaces' dozen arrays, and the
+loop made ~10 calls per iteration. Fresh-Problem UR5 pose solves took 0.93x the time (mean 0.90x), the answers
+identical. Each inlined copy is compiled again, and a linearization inlines every block kind's kernel: inlining
+also the polish's linearization and the step's normal equations (``gram``, ``levenberg_marquardt_step``) measured
+0.88-0.91x but took the first UR5 solve's compile from 77 s to 226 s; as kept, 135 s (compiled once per install).
 
 Contact rows are taken lazily: each start first descends without the collision blocks (``SPHERES``, ``SOLIDS``,
 the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
@@ -410,7 +412,7 @@ def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear
                 for i in range(n):
                     xt[i] = x[i] + dx[i]
                 project(xt, lower, upper, box_wrap)
-                linearize_inline(xt, TASK, kin, prog, trial, NO, COMPUTE)
+                linearize(xt, TASK, kin, prog, trial, NO, COMPUTE)
                 evaluations += 1
                 et = squared_norm(trial[3], m)
                 if et < e:
