@@ -110,7 +110,7 @@ def workspace_pair(kin, prog, n):
 def linearize(x, level, kin, prog, ws, want_jacobian, kinematics) -> int:
     """:func:`linearize_inline` as a call of its own: the form every caller takes but the reach loop's trial point,
     which inlines it (a call passes the workspace's and the program's dozen arrays field by field, ~70 ns; each
-    inlined copy compiles every block kind's kernel again, ~50 s of a fresh install's first solve)."""
+    inlined copy compiles every block kind's kernel again: see :mod:`~framework.engine.reach` for the cost)."""
     return linearize_inline(x, level, kin, prog, ws, want_jacobian, kinematics)
 
 
