@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: The commands that solve (and so run compiled code).
 SOLVING = ("run", "bench", "reach")
-COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), about 3 "
+COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), about 4 "
              "minutes on 2 cores; later runs load them from the cache")
 
 
