@@ -192,8 +192,9 @@ def test_callback_sees_every_iteration_and_can_stop(problem):
 
 
 def test_hybrid_starts_from_q_prev_and_escalates_when_that_basin_misses():
-    """The engine straight from the motion terms' q_prev; if that basin misses the task, random restarts, then
-    the 30-generation phase from a uniform start; the better result by the objective is kept."""
+    """The engine straight from the motion terms' q_prev; if that basin misses the task, random restarts (the
+    report counts them, the first drawn start included), then the 30-generation phase from a uniform start; the
+    better result by the objective is kept."""
     from framework.costs import Orientation
 
     robot = fw.load_robot("youbot_arm")
@@ -214,6 +215,7 @@ def test_hybrid_starts_from_q_prev_and_escalates_when_that_basin_misses():
         else:
             missed += 1
             assert auto.cost <= basin.cost + 1e-12
+            assert auto.settings["restart_count"] >= 1  # the basin was left: a drawn start, counted as a restart
             rescued += auto.success
     assert missed >= 1 and rescued == missed
 

@@ -5,7 +5,8 @@
    Levenberg-Marquardt reaches the task, Newton steps minimize the regularizers on it. From a warm start the
    engine first stays in its basin (no restart; along a path a restart would jump to another branch), then
    restarts from random configurations if that basin misses (the first of them drawn too: the warm start's
-   basin was searched); from the middle it restarts at once.
+   basin was searched; the report's ``restart_count`` counts every descent from a drawn configuration); from
+   the middle it restarts at once.
 2. If that misses the task, a short global phase of a metaheuristic (``cmaes_fast``, 30 generations) from a
    uniform start picks another point for the engine (the better of the two is kept). An explicit
    ``global_iterations`` runs the global phase first instead.
@@ -189,7 +190,7 @@ class Hybrid(IKSolver):
             nonlocal iterations, evaluations, restarts
             result = solve_local(program, x, draws, settings, deadline=request.deadline)
             iterations, evaluations = iterations + result.iterations, evaluations + result.evaluations
-            restarts += result.restarts
+            restarts += result.restarts + (x is None)  # a descent from a drawn start is a restart too
             counter.report(result.x)
             return result
 
