@@ -6,6 +6,9 @@ targets, and random target pairs kept only when the unconstrained solve puts one
 platform: targets are the hands of uniform random configurations that coal finds collision-free — so a
 collision-free solution exists for every target, by construction — and the unconstrained optimum differs from the
 collision-free one for every kept target (it collides). Solved with ``SelfCollision(shape, margin=0.005)`` added.
+The unconstrained problems are also solved from a uniform random start (``initial``, from a stream of its own):
+what leaving the warm start's basin costs without the term, beside the solves with the term split by where their
+answer came from (the warm start's basin, or a drawn start: the solve's ``restart_count``).
 
 (b) PR2 (torso and both 7-DOF arms, 15 DOF; its SRDF's disabled pairs) reaching over a table (a 0.6 x 1.2 x 0.05 m
 box, top at 0.625 m): both grippers' positions and orientations at targets, motion 0.1 on the middle of the box.
@@ -70,12 +73,13 @@ def _strictly(problem: fw.Problem, result: fw.IKResult, shape: fw.RobotShape, sc
 RUNS = 3
 
 
-def _timed(problem: fw.Problem, seed: int) -> tuple[fw.IKResult, float]:
-    """The solve's result and its fastest time of :data:`RUNS` runs [s] (the first includes packing the problem)."""
+def _timed(problem: fw.Problem, seed: int, **options) -> tuple[fw.IKResult, float]:
+    """The solve's result and its fastest time of :data:`RUNS` runs [s] (the first includes packing the problem);
+    ``options``: more arguments of ``fw.solve``."""
     best, result = np.inf, None
     for _ in range(RUNS):
         t = time.perf_counter()
-        result = fw.solve(problem, seed=seed, tolerance=TOLERANCE)
+        result = fw.solve(problem, seed=seed, tolerance=TOLERANCE, **options)
         best = min(best, time.perf_counter() - t)
     return result, best
 
@@ -104,6 +108,24 @@ def _ratio(coll: list, free: list) -> str:
     if not coll:
         return "(none)"
     return f"{np.median([t for _, _, t, _ in coll]) / np.median([t for _, _, t, _ in free]):.2f}x"
+
+
+def _by_basin(free: list, coll: list, drawn: list, left: list[bool]) -> str:
+    """The with-term solves split by where their answer came from (the warm start's basin, or a drawn start after
+    that basin met the task only in contact), each against the same targets' unconstrained solves; and what
+    leaving the warm basin costs without the term."""
+    parts = []
+    for label, keep in (("in the warm start's basin", False), ("from a drawn start (the warm start's basin met the "
+                                                                  "task only in contact)", True)):
+        part = [k for k, flag in enumerate(left) if flag == keep]
+        if part:
+            coll_ms = 1e3 * np.median([coll[k][2] for k in part])
+            parts.append(f"{label}: {len(part)} targets, median {coll_ms:.2f} ms, "
+                         f"{_ratio([coll[k] for k in part], [free[k] for k in part])} their unconstrained median")
+    return ("Where the answers with the term came from (the solve's report: a drawn start counts as a restart): "
+            + "; ".join(parts) + f". The unconstrained problem from a uniform random start instead of the warm one "
+            f"(its answers collide too, or not: the row above): {_ratio(drawn, free)} the warm unconstrained median — "
+            "what leaving the warm start's basin costs without any collision term.")
 
 
 HEADER = ["| solve | targets | task met % | no contact % | success % (both) | answers on hulls | median ms | p95 ms |",
@@ -138,7 +160,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
             result, seconds = _timed(problem, k)
             rows.append((*_strictly(problem, result, shape, None), seconds, _on_hulls(result)))
     paper = [_row("paper 000 targets, unconstrained", rows_free), _row("paper 000 targets, SelfCollision", rows_coll)]
-    kept_free, kept_coll, tries, build = [], [], 0, []
+    kept_free, kept_coll, kept_drawn, left, tries, build = [], [], [], [], 0, []
     while len(kept_coll) < count and tries < 200 * count:
         tries += 1
         x = robot.random_configurations(rng, 1)[0]
@@ -155,8 +177,15 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
         build += timing
         result, seconds = _timed(coll, tries)
         kept_coll.append((*_strictly(coll, result, shape, None), seconds, _on_hulls(result)))
+        left.append(result.settings["restart_count"] > 0)  # the answer came from a drawn start
+        # the cost of leaving the warm start's basin without the term: from a uniform random start (its own stream)
+        start = robot.random_configurations(np.random.default_rng([2026, tries]), 1)[0]
+        result, seconds = _timed(free, tries, initial=start)
+        kept_drawn.append((*_strictly(free, result, shape, None), seconds, _on_hulls(result)))
     lines += HEADER + paper + [_row("random targets the unconstrained solve collides on, unconstrained", kept_free),
-                               _row("the same targets, SelfCollision", kept_coll)]
+                               _row("the same targets, SelfCollision", kept_coll),
+                               _row("the same targets, unconstrained, from a uniform random start (``initial``)",
+                                    kept_drawn)]
     lines += ["", f"{len(kept_coll)} random targets kept of {tries} drawn (the others: the sampled configuration "
               "collides, or the unconstrained solve does not). Building a problem with the collision term "
               f"(packing its blocks): median {1e3 * np.median(build):.2f} ms.", "",
@@ -164,7 +193,8 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                   f"{label} {_ratio(kept_coll[part], kept_free[part])}" for label, part in (
                       ("all kept targets", slice(None)),
                       (f"the first {TUNED} (the engine's CONTACT_STALL was tuned on them)", slice(None, TUNED)),
-                      (f"the other {max(len(kept_coll) - TUNED, 0)} (held out)", slice(TUNED, None)))) + "."]
+                      (f"the other {max(len(kept_coll) - TUNED, 0)} (held out)", slice(TUNED, None)))) + ".", "",
+              _by_basin(kept_free, kept_coll, kept_drawn, left)]
     free, coll = problems(np.zeros(3), np.zeros(3))
     stats = {"shape": shape, "robot": robot, "free": free, "coll": coll, "blocks": len(coll.program.task_blocks),
              "spheres": len(shape.cover().radii), "pairs": len(shape.pairs)}
