@@ -112,11 +112,11 @@ def _ratio(coll: list, free: list) -> str:
 
 def _by_basin(free: list, coll: list, drawn: list, left: list[bool]) -> str:
     """The with-term solves split by where their answer came from (the warm start's basin, or a drawn start after
-    that basin met the task only in contact), each against the same targets' unconstrained solves; and what
+    that basin missed the task clear of contact), each against the same targets' unconstrained solves; and what
     leaving the warm basin costs without the term."""
     parts = []
-    for label, keep in (("in the warm start's basin", False), ("from a drawn start (the warm start's basin met the "
-                                                                  "task only in contact)", True)):
+    for label, keep in (("in the warm start's basin", False), ("from a drawn start (the warm start's basin missed "
+                                                                  "the task clear of contact)", True)):
         part = [k for k, flag in enumerate(left) if flag == keep]
         if part:
             coll_ms = 1e3 * np.median([coll[k][2] for k in part])
@@ -124,7 +124,7 @@ def _by_basin(free: list, coll: list, drawn: list, left: list[bool]) -> str:
                          f"{_ratio([coll[k] for k in part], [free[k] for k in part])} their unconstrained median")
     return ("Where the answers with the term came from (the solve's report: a drawn start counts as a restart): "
             + "; ".join(parts) + f". The unconstrained problem from a uniform random start instead of the warm one "
-            f"(its answers collide too, or not: the row above): {_ratio(drawn, free)} the warm unconstrained median — "
+            f"(the row above): {_ratio(drawn, free)} the warm unconstrained median — "
             "what leaving the warm start's basin costs without any collision term.")
 
 
