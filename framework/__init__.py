@@ -5,12 +5,8 @@ The data flow follows the package layout: robot model (:mod:`~framework.robot`, 
 tracking → results and recordings.
 """
 
-from .numba_cache import drop_stale_entries
-
-drop_stale_entries()  # before any compiled function loads: cached code of edited sources is dropped
-
 from .compose import Mount, mount, mount_urdf, planar_base_urdf
-from .costs import (CenterOfMass, SelfCollision, Obstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, Pose, Position,
+from .costs import (CenterOfMass, SelfCollision, Obstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, PointOnLine, PointOnPlane, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
     ConfigurationError,
@@ -55,6 +51,8 @@ __all__ = [
     "Motion",
     "Objective",
     "Orientation",
+    "PointOnLine",
+    "PointOnPlane",
     "Pose",
     "Position",
     "Problem",

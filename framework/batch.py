@@ -245,7 +245,7 @@ def item_parameters(problem: Problem, targets) -> tuple[np.ndarray, int]:
     if len(sizes) != 1:
         raise TaskError(f"every term needs one target per item; got {dict((k, len(v)) for k, v in columns.items())}")
     B = sizes.pop()
-    P = np.tile(program.prog[2], (B, 1))
+    P = np.tile(program.packed.params, (B, 1))
     for k, name in enumerate(problem.names):
         if name in columns:
             start, stop = program.layout.param_spans[k]

@@ -18,11 +18,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import numba
+from typing import NamedTuple
+
 import numpy as np
 import pinocchio as pin
 
 from .kinematics import PopulationKinematics, fk_one
+from .native import compiled, internal
 from .robot import Robot
 from .solids import ROW, solid_distance
 
@@ -72,9 +74,22 @@ class BoundingSpheres:
         """Indices of the collision pairs whose spheres are closer than ``margin`` [m] (plus :data:`SLACK`) at
         joint coordinates ``x`` ``(n,)``: every pair that can be closer than ``margin``."""
         out = np.empty(self.first.size, dtype=np.int64)
-        count = _near_pairs(np.ascontiguousarray(x, dtype=float), *self.kinematics.tables, self.slots, self.centers,
-                            self.radii, self.codes, self.solids, self.first, self.second, float(margin) + SLACK, out)
+        spheres = Spheres(self.slots, self.centers, self.radii, self.codes, self.solids, self.first, self.second)
+        count = _near_pairs(np.ascontiguousarray(x, dtype=float), self.kinematics.tables, spheres,
+                            float(margin) + SLACK, out)
         return out[:count]
+
+
+class Spheres(NamedTuple):
+    """The arrays of :class:`BoundingSpheres` the compiled broad phase reads."""
+
+    slots: np.ndarray
+    centers: np.ndarray
+    radii: np.ndarray
+    codes: np.ndarray
+    solids: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
 
 
 def bounding_spheres(robot: Robot, geometry: pin.GeometryModel,
@@ -101,13 +116,14 @@ def bounding_spheres(robot: Robot, geometry: pin.GeometryModel,
                            np.array([p.second for p in pairs], dtype=np.int64))
 
 
-@numba.njit(cache=True)
-def _near_pairs(x, jint, jgeo, fslot, fgeo, slots, centers, radii, codes, solids, first, second, margin,
-                out) -> int:
-    """The pairs ``(first[p], second[p])`` that can be closer than ``margin`` at joint coordinates ``x (n,)``
-    (the bodies' poses from the FK tables ``jint, jgeo, fslot, fgeo``, in one compiled call: a check's broad
+@compiled
+def _near_pairs(x, tables, spheres, margin, out) -> int:
+    """The pairs ``(first[p], second[p])`` of ``spheres`` (:class:`Spheres`) that can be closer than ``margin`` at
+    joint coordinates ``x (n,)`` (the bodies' poses from the FK ``tables``, in one compiled call: a check's broad
     phase cost more in Python around the FK than in it), into ``out``; returns their count: those whose spheres
     are, unless a solid of the pair is clear of the other's sphere by ``margin``."""
+    jint, jgeo, fslot, fgeo = tables
+    slots, centers, radii, codes, solids, first, second = spheres
     poses, placements = np.empty((fslot.shape[0], 12)), np.empty((jint.shape[0], 12))
     fk_one(x, jint, jgeo, fslot, fgeo, poses, placements)
     positions, rotations = poses[:, 9:], poses[:, :9]
@@ -141,7 +157,7 @@ def _near_pairs(x, jint, jgeo, fslot, fgeo, slots, centers, radii, codes, solids
     return count
 
 
-@numba.njit(cache=True)
+@internal
 def _solid_gap(g, point, slots, positions, rotations, solids, gradient) -> float:
     """Signed distance [m] of the world ``point`` ``(3,)`` to geometry ``g``'s solid (its row in its body's
     frame); ``positions (k, 3)`` and ``rotations (k, 9)`` (row-major) are the bodies' world poses."""

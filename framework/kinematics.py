@@ -13,11 +13,10 @@ from __future__ import annotations
 from functools import cached_property
 from typing import TYPE_CHECKING, NamedTuple
 
-import numba
 import numpy as np
 
 from .errors import ConfigurationError, UnknownFrameError
-from .native import borrow, keep_alive
+from .native import borrow, compiled, internal, keep_alive
 from .trig import sincos
 from .joints import JointKind
 
@@ -160,7 +159,7 @@ class PopulationKinematics:
         return FramePoses(self.frames, out[:, :, 9:], out[:, :, :9].reshape(pop, k, 3, 3)), J
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
     """Forward kinematics of one configuration ``x`` into ``out (k, 12)``.
 
@@ -253,7 +252,7 @@ def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[9 + r] = w[3 * r] * g[9] + w[3 * r + 1] * g[10] + w[3 * r + 2] * g[11] + w[9 + r]
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def _finite(x) -> bool:
     for i in range(x.shape[0]):
         if not np.isfinite(x[i]):
@@ -261,7 +260,7 @@ def _finite(x) -> bool:
     return True
 
 
-@numba.njit(cache=True)
+@compiled
 def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
     """FK of every row of ``X``; returns the first row holding NaN/inf, or -1."""
     own = np.empty((jint.shape[0], 12))
@@ -277,7 +276,7 @@ def _fk_serial(X, jint, jgeo, fslot, fgeo, out):
     return bad
 
 
-@numba.njit(cache=True)
+@compiled
 def _jac_serial(X, jint, jgeo, fslot, fgeo, out, J):
     """FK and frame Jacobians of every row of ``X``; returns the first row holding NaN/inf, or -1."""
     own = np.empty((jint.shape[0], 12))
@@ -293,7 +292,7 @@ def _jac_serial(X, jint, jgeo, fslot, fgeo, out, J):
     return bad
 
 
-@numba.njit(cache=True)
+@internal
 def fk_jacobian_one(x, jint, jgeo, fslot, fgeo, out, W, J):
     """FK of one configuration into ``out (k, 12)`` and its frame Jacobians into ``J (k, 6, n)`` (overwritten).
 
@@ -304,7 +303,7 @@ def fk_jacobian_one(x, jint, jgeo, fslot, fgeo, out, W, J):
     frame_jacobians(x, jint, jgeo, fslot, out, W, J)
 
 
-@numba.njit(cache=True)
+@internal
 def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
     """Frame Jacobians ``J (k, 6, n)`` from the poses ``out`` and joint placements ``W`` of a FK at ``x``
     (columns add up: a mimic joint adds its multiplier times its own column to its leader's)."""
@@ -313,7 +312,7 @@ def frame_jacobians(x, jint, jgeo, fslot, out, W, J):
         frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def frame_jacobians_where(x, jint, jgeo, fslot, out, W, J, need):
     """:func:`frame_jacobians` of the frames ``f`` with ``need[f] != 0`` only (``need (k,)``; the other frames'
     ``J[f]`` are left as they were)."""
@@ -325,7 +324,7 @@ def frame_jacobians_where(x, jint, jgeo, fslot, out, W, J, need):
             frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def frame_jacobian(f, x, jint, jgeo, fslot, out, W, J):
     """Frame ``f``'s Jacobian added into ``J[f] (6, n)`` (zeroed before) along its chain of joints."""
     px, py, pz = out[f, 9], out[f, 10], out[f, 11]

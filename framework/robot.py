@@ -14,8 +14,9 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
-import numba
 import numpy as np
+
+from .native import compiled
 import pinocchio as pin
 
 from .errors import ConfigurationError, LimitsError, UnknownFrameError, UnknownJointError, UnsupportedJointError
@@ -129,6 +130,12 @@ class Robot:
     mimics: tuple[Joint, ...] = field(default=(), repr=False)
     #: compiled-kinematics programs and packed layouts, built on first use (not part of the robot's value)
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickled with its bounds read-only again (as built: the compiled code is typed by it)."""
+        self.__dict__.update(state)
+        for name in ("lower", "upper", "_middle"):
+            self.__dict__[name].flags.writeable = False
 
     def __post_init__(self) -> None:
         lower = np.asarray(self.lower, dtype=float)
@@ -501,7 +508,7 @@ def _suggest(name: object, known: Sequence[str]) -> str:
     return f"; known: {shown}{', ...' if len(known) > 12 else ''}"
 
 
-@numba.njit(cache=True)
+@compiled
 def _to_q(X, indices, factors, Q) -> None:
     """Pinocchio configurations ``Q (pop, nq)`` from joint coordinates ``X (pop, n)`` by the tables of
     :attr:`Robot._q_map` (a few numpy calls per entry kind cost ~25 µs for one configuration)."""

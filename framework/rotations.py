@@ -8,8 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numba
 import numpy as np
+
+from .native import compiled
 
 from .errors import TaskError
 
@@ -51,7 +52,7 @@ def rotation_defects(R: np.ndarray) -> np.ndarray:
     return (defect > 1e-6) | (np.linalg.det(R) <= 0)
 
 
-@numba.njit(cache=True)
+@compiled
 def _rotation_defect(R) -> int:
     """0 for a rotation matrix (``|RᵀR − I| <= 1e-6``, ``det R > 0``), 1 for NaN/inf, 2 otherwise."""
     for a in range(3):
@@ -68,7 +69,7 @@ def _rotation_defect(R) -> int:
     return 0 if det > 0 else 2
 
 
-@numba.njit(cache=True)
+@compiled
 def transform_defect(T) -> int:
     """0 for a homogeneous transform ``(4, 4)`` (finite, a rotation block, last row ``[0, 0, 0, 1]``), 1 for NaN
     or inf, 2 for a block that is no rotation, 3 for another last row."""
@@ -81,7 +82,7 @@ def transform_defect(T) -> int:
     return _rotation_defect(T[:3, :3])
 
 
-@numba.njit(cache=True)
+@compiled
 def pack_transform(T, out) -> int:
     """:func:`transform_defect` of ``T (4, 4)``; when 0, its position then its row-major rotation into ``out
     (12,)``."""

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import numba
+from .native import internal
 import numpy as np
 
 #: Solid codes (a row's first entry).
@@ -30,7 +30,7 @@ def solid_row(code: int, rotation: np.ndarray, center: np.ndarray, dims: Sequenc
                            np.asarray(dims, dtype=float)])
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def solid_distance(x, y, z, params, p, g) -> float:
     """Signed distance [m] of the point ``(x, y, z)`` to the solid whose row (:func:`solid_row`) starts at
     ``params[p]`` (negative inside), and its gradient into ``g[:3]``, both in the frame the row is given in.

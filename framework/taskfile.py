@@ -16,9 +16,8 @@ A task file reads top to bottom like the experiment it describes::
     base = [0, 0, "pi/2"]
 
     [[terms]]
-    type = "position"                     # position | orientation | direction | cone | look_at | center_of_mass |
-                                          # joint_target | distance | motion | relative_position |
-                                          # relative_pose | joint_limits | self_collision | obstacles
+    type = "position"                     # any term type (framework.costs.TERM_TYPES; docs/taskfile.md lists
+                                          # each one's keys)
     frame = "arm1_ee"
     target = "t_e1"                       # an expression over the case's variables
     weight = 1.2
@@ -81,8 +80,8 @@ from typing import Any
 import numpy as np
 
 from .collision import RobotShape
-from .costs import (CenterOfMass, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective,
-                    Obstacles, Orientation, Position, Program, RelativePose, RelativePosition, SelfCollision, Term)
+from .costs import TERM_TYPES, Objective, Program, Term
+from .costs.base import TermEntry
 from .errors import MetaikError, TaskError
 from .fabrik.taskfile import ReachTask, is_reach_task, reach_task_from_dict
 from .loading import load_robot
@@ -108,24 +107,6 @@ SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integ
                "warm_start": "bool", "predict": "bool"}
 #: Variables a tracking task defines at every waypoint.
 WAYPOINT_VARIABLES = ("t", "R", "k")
-TERM_KEYS = {
-    "position": {"frame", "target"},
-    "orientation": {"frame", "target"},
-    "motion": {"group", "previous", "norm"},
-    "relative_position": {"frame_a", "frame_b", "offset"},
-    "relative_pose": {"frame_a", "frame_b", "offset", "offset_rotation"},
-    "direction": {"frame", "direction", "axis"},
-    "cone": {"frame", "direction", "axis", "max_angle"},
-    "look_at": {"frame", "point", "axis"},
-    "center_of_mass": {"target", "axes"},
-    "joint_target": {"group", "target"},
-    "distance": {"frame", "to_frame", "to_point", "at_least", "at_most", "exactly"},
-    "joint_limits": set(),
-    "self_collision": {"margin"},
-    "obstacles": {"margin"},
-}
-
-
 @dataclass(frozen=True)
 class Case:
     """One IK solve of a task file: its name, problem and variables.
@@ -328,64 +309,26 @@ def _numeric(value: Sequence) -> bool:
                for row in rows)
 
 
-def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray, world: _World) -> Objective:
+def _objective(robot: Robot, terms: list, variables: Mapping, previous: np.ndarray, world: _World,
+               follows: list[int] | None = None) -> Objective:
+    """The terms of a task file's ``[[terms]]`` (each read by its class, :data:`~framework.costs.TERM_TYPES`);
+    ``follows`` gets the indices of those that measure from ``previous``."""
     pairs: list[tuple[float, Term]] = []  # one Objective at the end (each ``+`` would check every pair again)
     for i, spec in enumerate(terms):
         where = f"[[terms]] #{i + 1}"
         kind = spec.get("type")
-        if kind not in TERM_KEYS:
-            raise TaskError(f"{where}: unknown type {kind!r}; known: {sorted(TERM_KEYS)}")
-        unknown = set(spec) - TERM_KEYS[kind] - {"type", "weight", "name"}
+        if kind not in TERM_TYPES:
+            raise TaskError(f"{where}: unknown type {kind!r}; known: {sorted(TERM_TYPES)}")
+        cls = TERM_TYPES[kind]
+        accepted = {"type", "weight", "name", *cls.task_keys}
+        unknown = set(spec) - accepted
         if unknown:
-            raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}")
+            raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}; {kind} takes {sorted(accepted)}")
         weight = evaluate(spec.get("weight", 1.0), variables, f"{where} weight")
-        name = spec.get("name")
-        value = lambda key: evaluate(spec[key], variables, f"{where} {key}")
-        try:
-            if kind == "position":
-                term = Position(spec["frame"], value("target"), name=name)
-            elif kind == "orientation":
-                term = Orientation(spec["frame"], value("target"), name=name)
-            elif kind == "relative_pose":  # offset: the position of b in a; offset_rotation: its rotation
-                rotation = value("offset_rotation") if "offset_rotation" in spec else np.eye(3)
-                term = RelativePose(spec["frame_a"], spec["frame_b"], (value("offset"), rotation), name=name)
-            elif kind == "relative_position":
-                term = RelativePosition(spec["frame_a"], spec["frame_b"], value("offset"), name=name)
-            elif kind == "direction":
-                term = Direction(spec["frame"], value("direction"), axis=value("axis") if "axis" in spec else
-                                 (0.0, 0.0, 1.0), name=name)
-            elif kind == "cone":
-                term = Cone(spec["frame"], value("direction"), float(value("max_angle")),
-                            axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0), name=name)
-            elif kind == "center_of_mass":
-                term = CenterOfMass(value("target"), axes=str(spec.get("axes", "xyz")), name=name)
-            elif kind == "look_at":
-                term = LookAt(spec["frame"], value("point"), axis=value("axis") if "axis" in spec else (0.0, 0.0, 1.0),
-                              name=name)
-            elif kind == "joint_target":
-                term = JointTarget(spec["group"], value("target"), name=name)
-            elif kind == "distance":
-                if ("to_frame" in spec) == ("to_point" in spec):
-                    raise TaskError(f"{where} (distance) needs exactly one of to_frame and to_point")
-                bounds = {k: float(value(k)) for k in ("at_least", "at_most", "exactly") if k in spec}
-                term = Distance(spec["frame"], spec["to_frame"] if "to_frame" in spec else value("to_point"),
-                                name=name, **bounds)
-            elif kind == "self_collision":
-                term = SelfCollision(world.shape, margin=float(value("margin")) if "margin" in spec else 0.0,
-                                     name=name)
-            elif kind == "obstacles":
-                if not len(world.scene):
-                    raise TaskError(f"{where} (obstacles): the task file has no [[obstacles]] entries")
-                term = Obstacles(world.shape, world.scene, margin=float(value("margin")) if "margin" in spec
-                                 else 0.0, name=name)
-            elif kind == "motion":
-                prev = value("previous") if "previous" in spec else previous
-                term = Motion(spec["group"], prev, norm=spec.get("norm", "l2"), name=name)
-            else:
-                term = JointLimitPenalty(name=name or "joint_limits")
-        except KeyError as err:
-            raise TaskError(f"{where} ({kind}) needs a {err.args[0]!r} entry") from None
-        pairs.append((weight, term))  # (Objective checks the weights)
+        entry = TermEntry(spec, f"{where} ({kind})", lambda value, at: evaluate(value, variables, at), previous, world)
+        pairs.append((weight, cls.from_entry(entry)))  # (Objective checks the weights)
+        if follows is not None and entry.follows:
+            follows.append(i)
     return Objective(tuple(pairs))
 
 
@@ -397,11 +340,12 @@ class _TermsAtWaypoint:
         self.robot, self.terms, self.variables, self.world = robot, terms, dict(variables), world
         self.__name__ = "task file terms"
 
-    def __call__(self, k: int, position: np.ndarray, rotation: np.ndarray | None, previous: np.ndarray) -> Objective:
+    def __call__(self, k: int, position: np.ndarray, rotation: np.ndarray | None, previous: np.ndarray,
+                 follows: list[int] | None = None) -> Objective:
         point = {**self.variables, "t": position, "k": float(k)}
         if rotation is not None:
             point["R"] = rotation
-        return _objective(self.robot, self.terms, point, previous, self.world)
+        return _objective(self.robot, self.terms, point, previous, self.world, follows)
 
     def path_parameters(self, problem: Problem, trajectory: Trajectory) -> tuple[np.ndarray, tuple] | None:
         """``(P, follows)``: the parameters ``P (K, p)`` of ``problem`` (built by this builder) at every waypoint of
@@ -410,13 +354,15 @@ class _TermsAtWaypoint:
         waypoints' objectives differ in more than their parameters (their terms or weights; or the problem added
         a term of its own, as ``bounds="penalty"`` adds a joint-limit penalty)."""
         program = problem.program
-        P = np.empty((trajectory.K, program.prog[2].size))
+        P = np.empty((trajectory.K, program.packed.params.size))
+        follows: list[int] = []  # the terms that measure from the previous solution
         for k in range(trajectory.K):
-            at = Program(self.robot, self(k, trajectory.positions[k], trajectory.rotation(k), self.robot.middle))
+            objective = self(k, trajectory.positions[k], trajectory.rotation(k), self.robot.middle,
+                             follows if k == 0 else None)
+            at = Program(self.robot, objective)
             if at.layout is not program.layout or at.weight_list != program.weight_list:
                 return None
-            P[k] = at.prog[2]
-        follows = [i for i, spec in enumerate(self.terms) if spec.get("type") == "motion" and "previous" not in spec]
+            P[k] = at.packed.params
         return P, program.layout.references_of(follows)
 
 

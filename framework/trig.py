@@ -17,7 +17,7 @@ the last place apart (``tests/test_trig.py``).
 
 from __future__ import annotations
 
-import numba
+from .native import internal
 import numpy as np
 
 #: Largest ``|x|`` reduced here (``n < 2²⁰``: ``n·p₁`` exact); beyond, and for NaN / inf, libm's functions.
@@ -36,7 +36,7 @@ _C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015
 _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def sincos(x: float) -> tuple[float, float]:
     """``(sin x, cos x)`` [x in rad], within one unit in the last place of libm's (see the module)."""
     if not abs(x) <= REDUCED:  # (NaN too)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 
@@ -253,30 +254,35 @@ def test_jacobians_of_the_frames_a_call_needs_equal_every_frames(rng):
     (their frames skipped) give the same residuals and Jacobian rows as one call computing every frame's
     Jacobian — itself checked against finite differences in tests/test_costs.py. Dual youBot with SelfCollision,
     at random configurations (most of them in contact) and at configurations clear of contact."""
-    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, workspace
-    from framework.engine.reach import without_contacts
+    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES
+    from framework.engine.tables import without_contacts
     from framework.taskfile import load_task
+    from tests.compiled import linearize_in, make_workspaces, python_callable, rows_in, use_table
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
     robot = task.robot
     problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.2, 0.4]) + fw.Position("arm2_ee", [0.5, -0.2, 0.4])
                          + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
-    kin, prog = problem.program.kin, problem.program.prog
-    lazy = (without_contacts(prog[0])[0], *prog[1:])
-    (own_whole, whole), (own_split, split), (own_part, part) = (workspace(kin, prog, robot.n) for _ in range(3))
+    packed = problem.program.packed
+    lazy, contacts = python_callable(without_contacts)(packed.blocks)
+    assert contacts and lazy is not packed.blocks
+    owners, records = make_workspaces(packed, robot.n, 3)
+    WHOLE, SPLIT, PART = 0, 1, 2
+    use_table(records, PART, lazy)
     active = clear = 0
     for x in robot.random_configurations(rng, 120):
-        m = linearize(x, TASK, kin, prog, whole, YES, COMPUTE)
-        assert linearize(x, TASK, kin, prog, split, NO, COMPUTE) == m
-        linearize(x, TASK, kin, prog, split, YES, JACOBIANS_FROM_POSES)
-        np.testing.assert_array_equal(split[3][:m], whole[3][:m])
-        np.testing.assert_array_equal(split[4][:m], whole[4][:m])
-        contact = np.any(whole[3][6:m] != 0.0)
+        m = linearize_in(records, WHOLE, x, TASK, YES, COMPUTE)
+        assert linearize_in(records, SPLIT, x, TASK, NO, COMPUTE) == m
+        linearize_in(records, SPLIT, x, TASK, YES, JACOBIANS_FROM_POSES)
+        (r_whole, J_whole, *_), (r_split, J_split, *_) = rows_in(records, WHOLE, m), rows_in(records, SPLIT, m)
+        np.testing.assert_array_equal(r_split, r_whole)
+        np.testing.assert_array_equal(J_split, J_whole)
+        contact = np.any(r_whole[6:] != 0.0)
         active += contact
         clear += not contact
-        k = linearize(x, TASK, kin, lazy, part, YES, COMPUTE)  # the position rows only
+        k = linearize_in(records, PART, x, TASK, YES, COMPUTE)  # the position rows only
         assert k == 6
-        np.testing.assert_array_equal(part[4][:k], whole[4][:k])
+        np.testing.assert_array_equal(rows_in(records, PART, k)[1], J_whole[:k])
     assert active >= 10 and clear >= 3
 
 
@@ -286,27 +292,37 @@ def test_restoring_steps_see_the_rows_in_contact_as_the_kernel_stacks_them(rng):
     rows that the kernel stacks for the block table with the clear ones set aside — exactly the rows of the whole
     task that are not clear, in order. Dual youBot with SelfCollision at random configurations (most in contact,
     a trivial compaction — none set aside — would leave 40 zero rows in)."""
-    from framework.costs.kernels import COMPUTE, TASK, YES, linearize, workspace
-    from framework.engine.newton import _set_aside_clear
+    from framework.costs.kernels import COMPUTE, TASK, YES
+    from framework.costs.workspace import views
+    from framework.engine.tables import set_aside_clear
     from framework.taskfile import load_task
+    from tests.compiled import linearize_in, make_workspaces, rows_in, use_table
+
+    @numba.njit
+    def set_aside(records, i, near):
+        v = views(records[i])
+        return set_aside_clear(v.blocks, v.r, v.J, near)
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
     robot = task.robot
     problem = fw.Problem(robot, fw.Position("arm1_ee", [0.5, 0.2, 0.4]) + fw.Position("arm2_ee", [0.5, -0.2, 0.4])
                          + fw.SelfCollision(fw.RobotShape(robot), margin=0.005) + 0.1 * fw.Motion("all", np.zeros(13)))
-    kin, prog = problem.program.kin, problem.program.prog
-    (own_whole, whole), (own_kept, kept) = (workspace(kin, prog, robot.n) for _ in range(2))
-    near = prog[0].copy()
+    packed = problem.program.packed
+    owners, records = make_workspaces(packed, robot.n, 2)
+    WHOLE, KEPT = 0, 1
+    near = packed.blocks.copy()
+    use_table(records, KEPT, near)
     compacted = 0
     for x in robot.random_configurations(rng, 60):
-        m = linearize(x, TASK, kin, prog, whole, YES, COMPUTE)
-        r, J = whole[3][:m].copy(), whole[4][:m].copy()
+        m = linearize_in(records, WHOLE, x, TASK, YES, COMPUTE)
+        r, J = rows_in(records, WHOLE, m)[:2]
         nonzero = (r != 0.0) | np.any(J != 0.0, axis=1)
-        mn = _set_aside_clear(prog[0], whole[3], whole[4], near)
-        assert linearize(x, TASK, kin, (near, *prog[1:]), kept, YES, COMPUTE) == mn
-        np.testing.assert_array_equal(whole[3][:mn], kept[3][:mn])
-        np.testing.assert_array_equal(whole[4][:mn], kept[4][:mn])
-        np.testing.assert_array_equal(whole[3][6:mn], r[6:][nonzero[6:]])  # one row per contact block
+        mn = set_aside(records, WHOLE, near)
+        assert linearize_in(records, KEPT, x, TASK, YES, COMPUTE) == mn
+        (r_whole, J_whole, *_), (r_kept, J_kept, *_) = rows_in(records, WHOLE, mn), rows_in(records, KEPT, mn)
+        np.testing.assert_array_equal(r_whole, r_kept)
+        np.testing.assert_array_equal(J_whole, J_kept)
+        np.testing.assert_array_equal(r_whole[6:], r[6:][nonzero[6:]])  # one row per contact block
         assert mn == 6 + nonzero[6:].sum()
         compacted += mn < m
     assert compacted >= 50
@@ -359,9 +375,11 @@ def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
     reads (dual youBot, 60 random configurations); a row clear at m but within b of it reads its gap − b, and its
     Jacobian is the gap's (central finite differences). A copy that left the margins as they are would read 0
     on those rows, with no Jacobian."""
-    from framework.costs.collision_blocks import widen_margins
-    from framework.costs.kernels import residuals_at
+    from framework.costs.kernels import residuals_at, widen_margins
     from framework.engine.local import residual_arrays
+    from tests.compiled import python_callable
+
+    widen_margins = python_callable(widen_margins)
     from framework.taskfile import load_task
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
@@ -370,15 +388,15 @@ def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
     margin, band = 0.005, 0.05
     narrow = fw.Problem(robot, fw.SelfCollision(shape, margin=margin)).program
     wide = fw.Problem(robot, fw.SelfCollision(shape, margin=margin + band)).program
-    params = np.empty_like(narrow.prog[2])
-    widen_margins(narrow.prog[0], narrow.prog[2], band, params)
-    widened = (narrow.prog[0], narrow.prog[1], params, *narrow.prog[3:])
+    params = np.empty_like(narrow.packed.params)
+    widen_margins(narrow.packed.blocks, narrow.packed.params, band, params)
+    widened = narrow.packed._replace(params=params)
     (r, J), (rw, Jw), (re, Je) = residual_arrays(narrow), residual_arrays(narrow), residual_arrays(wide)
     near, h = 0, 1e-7
     for x in robot.random_configurations(rng, 60):
-        m = residuals_at(x, -1, narrow.kin, narrow.prog, r, J)
-        assert residuals_at(x, -1, narrow.kin, widened, rw, Jw) == m
-        residuals_at(x, -1, wide.kin, wide.prog, re, Je)
+        m = residuals_at(x, -1, narrow.packed, r, J)
+        assert residuals_at(x, -1, widened, rw, Jw) == m
+        residuals_at(x, -1, wide.packed, re, Je)
         np.testing.assert_allclose(rw[:m], re[:m], atol=1e-15)
         np.testing.assert_allclose(Jw[:m], Je[:m], atol=1e-14)
         for a in np.flatnonzero((r[:m] == 0.0) & (rw[:m] < -1e-4)):  # clear at m, within the band
@@ -388,10 +406,10 @@ def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
             for i in range(robot.n):
                 e = np.zeros(robot.n)
                 e[i] = h
-                residuals_at(x + e, -1, narrow.kin, widened, re, Je)
+                residuals_at(x + e, -1, widened, re, Je)
                 plus = re[a]
-                residuals_at(x - e, -1, narrow.kin, widened, re, Je)
+                residuals_at(x - e, -1, widened, re, Je)
                 fd[i] = (plus - re[a]) / (2 * h)
-            residuals_at(x, -1, narrow.kin, widened, rw, Jw)
+            residuals_at(x, -1, widened, rw, Jw)
             np.testing.assert_allclose(Jw[a], fd, atol=1e-6)
     assert near >= 10

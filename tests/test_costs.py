@@ -233,41 +233,37 @@ def test_lagrangian_curvature_of_a_task_on_its_target(robot, rng):
 
 
 def _curvature(program, x, mu):
-    from framework.costs.curvature import block_curvature
-    from framework.costs.kernels import linearize, workspace
+    from tests.compiled import curvature_at
 
-    own, ws = workspace(program.kin, program.prog, x.size)  # (own: the buffer ws is carved from, kept alive)
-    linearize(x, 1, program.kin, program.prog, ws, True, 1)
-    H = np.zeros((x.size, x.size))
-    block_curvature(0, mu, ws[0], ws[2], program.prog[0], program.prog[2], program.prog[3], program.prog[5],
-                    program.prog[6], ws[3],
-                    0, H)
-    return H
+    return curvature_at(x, program.packed, np.int64(1), np.int64(0), np.int64(0), mu)
 
 
 def test_a_workspace_pair_is_two_disjoint_workspaces_each_linearizing_as_one_alone(robot, rng):
     """The engine's point and trial workspaces, carved from one allocation: the views of a lone workspace's shapes,
     no byte shared between the two, and each gives a lone workspace's residuals and Jacobians (bit for bit) while the
     other is written."""
-    from framework.costs.kernels import COMPUTE, TASK, YES, linearize, workspace, workspace_pair
+    from framework.costs.kernels import COMPUTE, TASK, YES
+    from framework.costs.workspace import WORKSPACE
+    from tests.compiled import linearize_in, make_workspaces, rows_in
 
     program = Program(robot, fw.Objective(tuple((1.0, t) for t in all_terms(robot, 3))))
-    kin, prog = program.kin, program.prog
-    own, ws = workspace(kin, prog, robot.n)
-    own_pair, first, second = workspace_pair(kin, prog, robot.n)
-    assert own_pair.size == 2 * own.size
-    for a, b, lone in zip(first, second, ws):
-        assert a.shape == b.shape == lone.shape
-    assert not any(np.shares_memory(a, b) for a in first for b in second)
+    (lone_buffer, _), lone = make_workspaces(program.packed, robot.n, 1)
+    (buffer, records), pair = make_workspaces(program.packed, robot.n, 2)
+    assert buffer.size == 2 * lone_buffer.size and np.shares_memory(records, pair)
+    arrays = [name for name in WORKSPACE.names if name in ("poses", "placements", "jacobians", "residuals",
+                                                           "residual_jacobian", "scratch", "need")]
+    first, second = ([pair[i][name] for name in arrays] for i in (0, 1))  # their arrays' addresses, in order
+    assert first == sorted(first) and second == sorted(second) and first[0] < second[0]
+    start, end = buffer.ctypes.data, buffer.ctypes.data + buffer.nbytes
+    assert start <= first[0] and second[0] == start + buffer.nbytes // 2 and second[-1] < end  # disjoint halves
     x, y = rng.uniform(robot.lower, robot.upper, size=(2, robot.n))
-    rows = linearize(x, TASK, kin, prog, ws, YES, COMPUTE)
-    assert linearize(x, TASK, kin, prog, first, YES, COMPUTE) == rows
-    linearize(y, TASK, kin, prog, second, YES, COMPUTE)  # the other one written at another configuration
-    for k in (0, 2):  # poses, frame Jacobians
-        np.testing.assert_array_equal(first[k], ws[k])
-    for k in (3, 4):  # the task's residual rows and their Jacobian (the rows after them are the regularizers')
-        np.testing.assert_array_equal(first[k][:rows], ws[k][:rows])
-    assert rows > 0 and not np.array_equal(first[3][:rows], second[3][:rows])
+    rows = linearize_in(lone, 0, x, TASK, YES, COMPUTE)
+    assert linearize_in(pair, 0, x, TASK, YES, COMPUTE) == rows
+    linearize_in(pair, 1, y, TASK, YES, COMPUTE)  # the other one written at another configuration
+    alone, one, other = rows_in(lone, 0, rows), rows_in(pair, 0, rows), rows_in(pair, 1, rows)
+    for a, b in zip(one, alone):  # residual rows, their Jacobian, poses, frame Jacobians
+        np.testing.assert_array_equal(a, b)
+    assert rows > 0 and not np.array_equal(one[0], other[0])
 
 
 # ---------------------------------------------------------------------- bad input
@@ -396,8 +392,8 @@ def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
         term.set_target(target)
     built = Problem(robot, sum(fresh[1:], fresh[0]))
     np.testing.assert_array_equal(problem.cost(X), built.cost(X))
-    np.testing.assert_array_equal(problem.program.prog[2], built.program.prog[2])
-    assert not np.array_equal(problem.program.prog[2], Problem(robot, sum(terms(1)[1:], terms(1)[0])).program.prog[2])
+    np.testing.assert_array_equal(problem.program.packed.params, built.program.packed.params)
+    assert not np.array_equal(problem.program.packed.params, Problem(robot, sum(terms(1)[1:], terms(1)[0])).program.packed.params)
     for term in fresh:
         blocks = term.blocks(robot)
         np.testing.assert_array_equal(term.parameters(robot), np.concatenate([b.params for b in blocks]))

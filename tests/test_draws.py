@@ -5,6 +5,9 @@ import pytest
 from scipy import stats
 
 from framework.engine.draws import draws, stream, uniform
+from tests.compiled import python_callable
+
+uniform = python_callable(uniform)
 from framework.errors import SolverError
 
 MASK = 2**64 - 1

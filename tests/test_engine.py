@@ -49,7 +49,10 @@ def test_the_damping_follows_the_gain_ratio_of_the_step_taken(panda, rng):
     computed here with numpy: the drop of ‖r‖² between Panda poses (the engine's residuals, which other tests check
     against Pinocchio) over the drop the linearization at the start predicts for the step. A wrapping coordinate's
     step is the one before the wrap (2π off in ``xt − x``). A fixed ÷4 would match neither ρ's range."""
-    from framework.engine.reach import DAMPING_DOWN, gain_factor
+    from framework.engine.steps import DAMPING_DOWN, gain_factor
+    from tests.compiled import python_callable
+
+    gain_factor = python_callable(gain_factor)
 
     problem = Problem(panda, fw.Pose("panda_hand_tcp", panda.frame_placement(panda.middle, "panda_hand_tcp")))
     wraps = np.zeros(panda.n, dtype=bool)
@@ -281,7 +284,10 @@ def test_a_blocking_row_is_cut_at_its_boundary_and_never_held_past_x():
     them crosses zero along the step (found here by bisection on the functions themselves); a row whose
     linearization at the trial puts x on its violated side is held where x is (``cb = 0``), the others at their
     linearized value at x."""
-    from framework.engine.newton import _boundary_fraction, _entered
+    from framework.engine.active_set import boundary_fraction, entered
+    from tests.compiled import python_callable
+
+    _boundary_fraction, _entered = python_callable(boundary_fraction), python_callable(entered)
 
     n, m = 3, 4
     x, dx = np.zeros(n), np.array([1.0, -0.5, 0.25])

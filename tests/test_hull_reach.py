@@ -4,6 +4,7 @@ coal's distances; success decided by the exact check, not by the sphere rows."""
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 import pytest
 
@@ -132,7 +133,8 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
     violated (stopping at the first one that is), agrees with the collision term's value (positive exactly when a
     pair is closer than the margin) over random youBot configurations, most of which are in contact; a draw ends
     at the first clear one, within the box."""
-    from framework.costs.kernels import hinges_clear, workspace
+    from framework.costs.kernels import hinges_clear
+    from tests.compiled import make_workspaces
     from framework.engine.draws import stream
     from framework.engine.local import LocalSettings, solve_local
     from framework.engine.reach import CLEAR_DRAWS
@@ -142,8 +144,13 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
     program = problem.program
     X = robot.random_configurations(rng, 60)
     values = problem.values(X)[:, 1]
-    own, ws = workspace(program.kin, program.prog, robot.n)  # (own: the buffer ws is carved from, kept alive)
-    clear = [hinges_clear(x, program.kin, program.prog, ws) for x in X]
+    owners, records = make_workspaces(program.packed, robot.n, 1)
+
+    @numba.njit
+    def clear_at(x, records):
+        return hinges_clear(x, records[0])
+
+    clear = [clear_at(x, records) for x in X]
     assert clear == [bool(v == 0) for v in values.tolist()]
     assert 0 < sum(clear) < len(clear)
     draws, drawn = stream(3), LocalSettings(max_iterations=0, restarts=False, regularize=False)

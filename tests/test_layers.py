@@ -106,3 +106,29 @@ def test_every_long_module_states_why():
     lengths = {m: len((PACKAGE / m).read_text(encoding="utf-8").splitlines()) for m in modules()}
     assert [m for m, n in lengths.items() if n > 450 and m not in named] == []
     assert [m for m in named if m in lengths and lengths[m] <= 350] == []
+
+
+def _compiled_functions():
+    """``(module, function node)`` of every compiled function of the package: decorated with ``compiled`` or
+    ``internal`` (:mod:`framework.native`), or a block kind's kernel (a function of one workspace record ``ws``)."""
+    for path in modules():
+        tree = ast.parse((PACKAGE / path).read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if not isinstance(node, ast.FunctionDef):
+                continue
+            decorators = [ast.unparse(d).split("(")[0] for d in node.decorator_list]
+            kernel = [a.arg for a in node.args.args] == ["ws"]
+            if kernel or any(d in ("compiled", "internal") for d in decorators):
+                yield path, node
+
+
+def test_compiled_functions_are_short_and_take_few_parameters():
+    """The engine and the kernels read in one sitting: no compiled function over 100 lines (its docstring
+    included) or 12 parameters (grouped data travels as named tuples or records)."""
+    found = list(_compiled_functions())
+    assert len(found) > 150  # the scan finds them (the engine, the kernels, the kinematics, ...)
+    long = [f"{path}:{node.name} ({node.end_lineno - node.lineno + 1} lines)" for path, node in found
+            if node.end_lineno - node.lineno + 1 > 100]
+    wide = [f"{path}:{node.name} ({len(node.args.args)} parameters)" for path, node in found
+            if len(node.args.args) + len(node.args.kwonlyargs) > 12]
+    assert long == [] and wide == []

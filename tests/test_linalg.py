@@ -5,8 +5,14 @@ import numpy as np
 import pytest
 import scipy.optimize as so
 
-from framework.engine.linalg import (DENSE_ROWS, least_norm_step, levenberg_marquardt_step, moving_columns,
-                                     moving_columns_step, null_space, symmetric_eigen, trust_region_step)
+from framework.engine import linalg
+from framework.engine.linalg import DENSE_ROWS
+from tests.compiled import python_callable
+
+least_norm_step, levenberg_marquardt_step, moving_columns, moving_columns_step, null_space, symmetric_eigen, \
+    trust_region_step = (python_callable(getattr(linalg, name)) for name in (
+        "least_norm_step", "levenberg_marquardt_step", "moving_columns", "moving_columns_step", "null_space",
+        "symmetric_eigen", "trust_region_step"))
 
 
 def test_damped_steps_solve_their_normal_equations_and_both_summations_give_the_same_numbers(rng):
@@ -151,47 +157,58 @@ def test_trust_region_step_is_the_models_minimum_on_the_ball(rng, kind):
             assert decrease == pytest.approx(-0.5 * w.min() * radius**2, rel=1e-9)
 
 
-def test_carved_views_are_the_buffers_entries_and_tangent_views_tile_their_size():
-    """``carve`` gives C-contiguous views of a flat buffer (writes land where numpy's slicing says); the Newton
-    phase's tangent scratch, carved from one buffer, tiles exactly ``tangent_size`` entries without overlap."""
+def test_taken_views_are_the_buffers_entries_and_the_tangent_scratch_tiles_its_size():
+    """``take`` gives C-contiguous views of consecutive entries (writes land where numpy's slicing says); the Newton
+    phase's tangent scratch, taken from one buffer, covers exactly the entries its dry run from address 0 counts,
+    each entry in one view."""
     import numba
 
-    from framework.engine.newton import tangent_size, tangent_views
-    from framework.native import carve
+    from framework.engine.tangent import tangent_scratch
+    from framework.native import take
 
     @numba.njit
     def fill(buffer, start, rows, cols):
-        view = carve(buffer, start, (rows, cols))
+        view, at = take(buffer.ctypes.data + 8 * start, (rows, cols))
         for i in range(rows):
             for j in range(cols):
                 view[i, j] = 100 * i + j
-        return carve(buffer, start + rows * cols, 3)
+        tail, _ = take(at, 3)
+        for i in range(3):
+            tail[i] = -1.0
+        return (at - buffer.ctypes.data) // 8
 
     buffer = np.zeros(40)
-    tail = fill(buffer, 5, 3, 4)
+    assert fill(buffer, 5, 3, 4) == 17
     expected = np.zeros(40)
     expected[5:17] = (100 * np.arange(3)[:, None] + np.arange(4)).ravel()
+    expected[17:20] = -1.0
     np.testing.assert_array_equal(buffer, expected)
-    assert tail.shape == (3,) and tail.flags.c_contiguous
-    tail[:] = -1.0  # a view: the buffer sees it
-    np.testing.assert_array_equal(buffer[17:20], -1.0)
 
     @numba.njit
-    def bump(v):
-        flat = v.reshape(v.size)
-        for i in range(flat.size):
-            flat[i] += 1.0
+    def bump(v):  # (1-D)
+        for i in range(v.shape[0]):
+            v[i] += 1.0
+        return 1
+
+    @numba.njit
+    def bump2(v):  # (2-D)
+        for i in range(v.shape[0]):
+            for j in range(v.shape[1]):
+                v[i, j] += 1.0
         return 1
 
     @numba.njit
     def mark(buffer, start, n, rows):
-        v = tangent_views(buffer, start, n, rows)
-        return (bump(v[0]) + bump(v[1]) + bump(v[2]) + bump(v[3]) + bump(v[4]) + bump(v[5]) + bump(v[6])
-                + bump(v[7]) + bump(v[8]) + bump(v[9]) + bump(v[10]) + bump(v[11]) + bump(v[12]) + bump(v[13])
-                + bump(v[14]) + bump(v[15]) + bump(v[16]) + bump(v[17]) + bump(v[18]))
+        size = tangent_scratch(0, n, rows)[1] // 8
+        v, end = tangent_scratch(buffer.ctypes.data + 8 * start, n, rows)
+        marked = (bump2(v.W) + bump2(v.Vh) + bump(v.beta) + bump2(v.Z) + bump2(v.HZ) + bump(v.hz) + bump(v.lz)
+                  + bump2(v.E) + bump2(v.Vz) + bump(v.wz) + bump(v.gz) + bump(v.c) + bump(v.p) + bump(v.dn)
+                  + bump(v.u) + bump(v.aa) + bump(v.la) + bump(v.ra) + bump(v.y))
+        return marked, size, (end - buffer.ctypes.data) // 8 - start
 
     n, rows, start = 5, 3, 7
-    buffer = np.zeros(start + tangent_size(n, rows) + 4)
-    assert mark(buffer, start, n, rows) == 19
-    np.testing.assert_array_equal(buffer[start:start + tangent_size(n, rows)], 1.0)  # each entry in one view
-    assert not buffer[:start].any() and not buffer[start + tangent_size(n, rows):].any()
+    buffer = np.zeros(start + 300)
+    marked, size, used = mark(buffer, start, n, rows)
+    assert marked == 19 and size == used == 2 * n * rows + 3 * rows + 6 * n * n + 6 * n + 2 * rows * rows
+    np.testing.assert_array_equal(buffer[start:start + size], 1.0)  # each entry in exactly one view
+    assert not buffer[:start].any() and not buffer[start + size:].any()

@@ -13,6 +13,10 @@ import pytest
 import framework as fw
 from framework.costs import Program
 from framework.solids import solid_distance
+from tests.compiled import curvature_at, linearize_in, make_workspaces, python_callable, rows_in, \
+    set_jacobian_rows
+
+solid_distance = python_callable(solid_distance)
 from framework.engine import residuals
 from framework.errors import TaskError
 from framework.spheres import SphereCover
@@ -114,9 +118,9 @@ def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(r
     shape = fw.RobotShape(robot)
     term = fw.SelfCollision(shape, margin=0.05)
     kinds = {b.kind for b in term.blocks(robot)}
-    from framework.costs import blocks as B
+    from framework.costs.collision import SOLIDS, SPHERES
 
-    assert kinds == {B.SPHERES, B.SOLIDS}
+    assert kinds == {SPHERES, SOLIDS}
     program = Program(robot, 1.0 * term)
     assert _hinge_jacobian_matches_differences(robot, program, rng, 8) > 10
 
@@ -125,24 +129,20 @@ def test_sphere_pair_curvature_matches_differences_on_the_mobile_dual_youbot(rng
     """μ ∇²r of each violated SPHERES row (the closest pair's distance: the Newton phase's Lagrangian curvature of a
     held contact) against central differences of μ J_row, at random configurations (rows whose closest pair stays
     the same within ±h; a trivial zero curvature misses by the rows' own curvature, ~1/‖v‖ on the Jacobian)."""
-    from framework.costs import blocks as B
-    from framework.costs.curvature import block_curvature
-    from framework.costs.kernels import linearize, workspace
+    from framework.costs.blocks import CONTACT
 
     robot = fw.load_robot("youbot_dual_mobile")
     program = Program(robot, 1.0 * fw.SelfCollision(fw.RobotShape(robot), margin=0.05))
-    bint = program.prog[0]
-    assert set(bint[:, B.ROWS]) == {1} and set(bint[:, B.LEVEL]) == {1}  # block b is row b
+    table = program.packed.blocks
+    assert set(table["rows"]) == {1} and set(table["level"]) == {1}  # block b is row b
+    spheres = table["curvature"] != 0  # SPHERES rows (SOLIDS rows have no curvature kernel)
+    assert np.all(table["flags"] & CONTACT) and 0 < spheres.sum() < table.size
     h, compared, largest = 1e-6, 0, 0.0
     for x in robot.random_configurations(rng, 12):
         r, _ = residuals(program, x)
-        own, ws = workspace(program.kin, program.prog, robot.n)
-        linearize(x, 1, program.kin, program.prog, ws, True, 1)
-        for b in np.flatnonzero((bint[:, B.KIND] == B.SPHERES) & (r < -1e-4)):
+        for b in np.flatnonzero(spheres & (r < -1e-4)):
             mu = rng.standard_normal()
-            H = np.zeros((robot.n, robot.n))
-            block_curvature(b, np.array([mu]), ws[0], ws[2], bint, program.prog[2], program.prog[3],
-                            program.prog[5], program.prog[6], ws[3], b, H)
+            H = curvature_at(x, program.packed, np.int64(1), np.int64(b), np.int64(b), np.array([mu]))
             plus = [residuals(program, x + e)[1][b] for e in np.eye(robot.n) * h]
             minus = [residuals(program, x - e)[1][b] for e in np.eye(robot.n) * h]
             fd = mu * (np.array(plus) - np.array(minus)) / (2 * h)  # row i: d(J_row)/dx_i
@@ -494,7 +494,7 @@ def test_jacobians_from_kept_poses_equal_a_full_linearization(rng):
     """The engine's accepted-step path (poses and residuals first, then Jacobians from the kept poses, where
     clear hinge rows keep a zero Jacobian without a second evaluation) gives the rows and Jacobian of one full
     call, on configurations with both clear and active collision rows."""
-    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, linearize, workspace
+    from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES
 
     robot = fw.load_robot("youbot_dual_mobile")
     shape = fw.RobotShape(robot)
@@ -503,14 +503,16 @@ def test_jacobians_from_kept_poses_equal_a_full_linearization(rng):
     program = fw.Problem(robot, objective).program
     n = robot.n
     active = clear = 0
+    FULL, KEPT = 0, 1
     for x in robot.random_configurations(rng, 30):
-        (own_full, full), (own_kept, kept) = (workspace(program.kin, program.prog, n) for _ in range(2))
-        m = linearize(x, TASK, program.kin, program.prog, full, YES, COMPUTE)
-        linearize(x, TASK, program.kin, program.prog, kept, NO, COMPUTE)
-        kept[4][:] = np.nan  # nothing of a previous Jacobian may survive
-        assert linearize(x, TASK, program.kin, program.prog, kept, YES, JACOBIANS_FROM_POSES) == m
-        np.testing.assert_array_equal(kept[3][:m], full[3][:m])
-        np.testing.assert_array_equal(kept[4][:m], full[4][:m])
-        active += int((full[3][3:m] != 0).sum())
-        clear += int((full[3][3:m] == 0).sum())
+        owners, records = make_workspaces(program.packed, n, 2)
+        m = linearize_in(records, FULL, x, TASK, YES, COMPUTE)
+        linearize_in(records, KEPT, x, TASK, NO, COMPUTE)
+        set_jacobian_rows(records, KEPT, np.nan)  # nothing of a previous Jacobian may survive
+        assert linearize_in(records, KEPT, x, TASK, YES, JACOBIANS_FROM_POSES) == m
+        (r_full, J_full, *_), (r_kept, J_kept, *_) = rows_in(records, FULL, m), rows_in(records, KEPT, m)
+        np.testing.assert_array_equal(r_kept, r_full)
+        np.testing.assert_array_equal(J_kept, J_full)
+        active += int((r_full[3:] != 0).sum())
+        clear += int((r_full[3:] == 0).sum())
     assert active >= 10 and clear >= 100

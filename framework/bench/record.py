@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from ..costs import Motion, Orientation, Position, RelativePosition
 from ..problem import Problem
 from ..stats import (
     METRICS,
@@ -29,8 +28,9 @@ class RunRecord:
         settings: every solver setting used (from :class:`~framework.solve.IKResult`).
         terms: unweighted value of every cost term, by name.
         task_error: sum of the unweighted task terms (position [m], orientation, relative position [m]).
-        position_error, orientation_error, motion_error: sums of the Position + RelativePosition, Orientation and
-            Motion terms (``None`` when the objective has no such term).
+        position_error, orientation_error, motion_error: sums of the terms measuring positions (Position,
+            RelativePosition, ...), orientations and motion (their ``category``;
+            ``None`` when the objective has no such term).
         cost, success, stop_reason, iterations, evaluations, wall_time [s]: as in ``IKResult``.
         configuration: the solution ``(n,)``.
         history_at, history: 1-based iterations and the best cost after them (downsampled).
@@ -96,15 +96,11 @@ def downsample(history: np.ndarray, points: int) -> tuple[list[int], list[float]
 
 
 def _error_sums(problem: Problem, terms: Mapping[str, float]) -> dict[str, float | None]:
-    kinds = {
-        "position_error": (Position, RelativePosition),
-        "orientation_error": (Orientation,),
-        "motion_error": (Motion,),
-    }
+    """The terms' values summed by what they measure (:attr:`~framework.costs.Term.category`)."""
     sums: dict[str, float | None] = {}
-    for key, classes in kinds.items():
-        names = [n for n, (_, t) in zip(problem.names, problem.objective) if isinstance(t, classes)]
-        sums[key] = float(sum(terms[n] for n in names)) if names else None
+    for category in ("position", "orientation", "motion"):
+        names = [n for n, (_, t) in zip(problem.names, problem.objective) if t.category == category]
+        sums[f"{category}_error"] = float(sum(terms[n] for n in names)) if names else None
     return sums
 
 

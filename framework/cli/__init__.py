@@ -14,7 +14,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
-from .. import numba_cache
+from .. import compile_cache
 from ..errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError
 from ..taskfile import resolve_task
 from .bench import add_bench_command, bench_command
@@ -59,25 +59,19 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: The commands that solve (and so run compiled code).
-SOLVING = ("run", "bench", "reach")
-COMPILING = ("first run after installing or updating metaik: compiling its solver kernels (numba), about 4 "
-             "minutes on 2 cores; later runs load them from the cache")
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     console = Console()
-    compiling = args.command in SOLVING and numba_cache.cold()
-    if compiling:  # a silent pause of minutes would look like a hang, and its time would be read as the solver's
-        Console(stderr=True).print(COMPILING, highlight=False, soft_wrap=True)
+    compiled_before = compile_cache.NOTICE.seconds  # each compile says so on stderr as it begins (NOTICE)
     try:
         commands = {"robots": robots_command, "show": show_command, "run": run_command, "tasks": tasks_command,
                     "solvers": solvers_command,
                     "bench": bench_command, "reach": reach_command, "replay": replay_command}
         code = commands[args.command](args, console)
-        if compiling:
-            Console(stderr=True).print("(the times above include that compilation)", highlight=False)
+        compiling = compile_cache.NOTICE.seconds - compiled_before
+        if compiling > 0:  # its time would be read as the solver's
+            Console(stderr=True).print(f"(the times above include {compiling:.0f} s of compiling, once per install)",
+                                       highlight=False)
         return code
     except MetaikError as err:
         Console(stderr=True).print(f"[bold red]error:[/] {escape(str(err))}", highlight=False, markup=True,

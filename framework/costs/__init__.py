@@ -4,15 +4,21 @@ from ..rotations import rotation_from
 from .base import LEVELS, Objective, Term, check_weight
 from .collision import Obstacles, SelfCollision
 from .com import CenterOfMass
-from .direction import Cone, Direction, LookAt
+from .cone import Cone
+from .direction import Direction
 from .distance import Distance
 from .limits import JointLimitPenalty
+from .look_at import LookAt
 from .motion import JointTarget, Motion
 from .orientation import Orientation
+from .point_on_line import PointOnLine
+from .point_on_plane import PointOnPlane
 from .pose import Pose, pose_from
 from .position import Position
 from .program import Block, Program
-from .relative import RelativePose, RelativePosition
+from .relative_pose import RelativePose
+from .relative_position import RelativePosition
+from .registry import TERM_CLASSES, TERM_TYPES
 
 __all__ = [
     "LEVELS",
@@ -27,6 +33,8 @@ __all__ = [
     "Motion",
     "Objective",
     "Orientation",
+    "PointOnLine",
+    "PointOnPlane",
     "Pose",
     "Position",
     "SelfCollision",
@@ -34,6 +42,8 @@ __all__ = [
     "Program",
     "RelativePose",
     "RelativePosition",
+    "TERM_CLASSES",
+    "TERM_TYPES",
     "Term",
     "check_weight",
     "pose_from",

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -38,6 +38,69 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..hulls import HullPair
 
 LEVELS = ("task", "regularizer", "value")
+
+
+@dataclass
+class TermEntry:
+    """A task file's ``[[terms]]`` entry as a term class reads it (:meth:`Term.from_entry`).
+
+    Attributes:
+        spec: the entry's table (its ``type``, ``weight`` and ``name`` included).
+        where: how errors name it (``"[[terms]] #2 (position)"``).
+        evaluate: ``(expression, where) -> value``: a number, a list or an expression over the case's variables.
+        before: ``(n,)`` the configuration before the case (:attr:`previous`).
+        world: the task file's collision shape and obstacles (``.shape``, ``.scene``; built on first use).
+        follows: whether the term read :attr:`previous` (along a path, it then measures from the previous
+            waypoint's solution).
+    """
+
+    spec: Mapping[str, Any]
+    where: str
+    evaluate: Callable[[Any, str], Any]
+    before: np.ndarray
+    world: Any
+    follows: bool = False
+
+    @property
+    def previous(self) -> np.ndarray:
+        """``(n,)`` the configuration before the case: motion terms measure from it by default (along a path, the
+        previous waypoint's solution)."""
+        self.follows = True
+        return self.before
+
+    @property
+    def name(self) -> str | None:
+        """The entry's ``name``, if it gives one."""
+        return self.spec.get("name")
+
+    def has(self, key: str) -> bool:
+        return key in self.spec
+
+    def value(self, key: str, default: Any = None) -> Any:
+        """The value of entry ``key`` (evaluated); ``default`` when the entry has none (``None``: required)."""
+        if key not in self.spec:
+            if default is None:
+                raise TaskError(f"{self.where} needs a {key!r} entry")
+            return default
+        return self.evaluate(self.spec[key], f"{self.where} {key}")
+
+    def number(self, key: str, default: float | None = None) -> float:
+        """Entry ``key`` as one number."""
+        value = self.value(key, default)
+        if np.ndim(value) != 0:
+            raise TaskError(f"{self.where} {key} must be a number; got {self.spec[key]!r}")
+        return float(value)
+
+    def text(self, key: str, default: str | None = None) -> str:
+        """Entry ``key`` as text (a frame, a group, a norm: not evaluated)."""
+        if key not in self.spec:
+            if default is None:
+                raise TaskError(f"{self.where} needs a {key!r} entry")
+            return default
+        value = self.spec[key]
+        if not isinstance(value, str):
+            raise TaskError(f"{self.where} {key} must be text; got {value!r}")
+        return value
 
 
 class Term:
@@ -62,6 +125,18 @@ class Term:
     has_target: bool = False
     #: Whether :meth:`collisions` checks something (collision terms).
     checks_collisions: bool = False
+    #: The task files' ``type`` of the term (``None``: task files cannot name it) and the keys its entries take
+    #: beside ``type``, ``weight`` and ``name`` (:meth:`from_entry` reads them).
+    task_type: ClassVar[str | None] = None
+    task_keys: ClassVar[tuple[str, ...]] = ()
+    #: What the term measures, for reports that sum errors by kind: ``"position"`` [m], ``"orientation"``,
+    #: ``"motion"``, or ``None``.
+    category: ClassVar[str | None] = None
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> Term:
+        """The term a task file's ``[[terms]]`` entry of :attr:`task_type` describes."""
+        raise TaskError(f"{entry.where}: {cls.__name__} terms cannot be given in task files")
 
     @property
     def is_task(self) -> bool:

@@ -11,8 +11,59 @@ import pinocchio as pin
 from ..errors import TaskError
 from ..robot import Robot
 from . import blocks as B
-from .base import Term, as_vector
+from .base import Term, TermEntry, as_vector
+from .curvature import position_curvature
+from .kinds import BlockKind
 from .program import Block
+from .workspace import RESIDUAL, views
+
+
+def com_residual(ws) -> int:
+    """``Σ_k m_k p_k − t`` on the masked axes and its Jacobian ``Σ_k m_k J_p,k``; the mass points' frame slots are
+    the block's indices; params ``t (3), mask (3), m (count)``."""
+    v = views(ws)
+    block, row, n = v.blocks[ws.block], ws.row, ws.n
+    p, q, count, params, Jf = block.params, block.indices, block.count, v.params, v.jacobians
+    k = row
+    for c in range(3):
+        if params[p + 3 + c] == 0.0:
+            continue
+        value = -params[p + c]
+        for s in range(count):
+            value += params[p + 6 + s] * v.poses[v.indices[q + s], 9 + c]
+        v.r[k] = value
+        if ws.mode != RESIDUAL:
+            for i in range(n):
+                g = 0.0
+                for s in range(count):
+                    g += params[p + 6 + s] * Jf[v.indices[q + s], c, i]
+                v.J[k, i] = g
+        k += 1
+    return block.rows
+
+
+def com_second_order(ws) -> int:
+    """``Σ_k m_k μ·∂²p_k``: exact."""
+    v = views(ws)
+    block, mu = v.blocks[ws.block], v.multipliers
+    p, q, count, params = block.params, block.indices, block.count, v.params
+    m = np.zeros(3)
+    k = 0
+    for c in range(3):
+        if params[p + 3 + c] != 0.0:
+            m[c] = mu[k]
+            k += 1
+    for s in range(count):
+        w = params[p + 6 + s]
+        position_curvature(v.indices[q + s], w * m[0], w * m[1], w * m[2], v.jacobians, v.chain_ptr, v.chain_idx,
+                           v.hessian)
+    return 0
+
+
+#: The centre of mass: a mass-weighted mean of mass points (frames at the bodies' centres of mass, the block's
+#: frames) against a target on the axes of a 0/1 mask (rows: the mask's sum) [m]; params ``t`` (3), mask (3),
+#: mass fractions (count).
+COM = BlockKind("centre of mass", com_residual, com_second_order, frame_indices=True)
 
 
 def mass_points(robot: Robot) -> tuple[tuple[str, ...], np.ndarray]:
@@ -43,6 +94,12 @@ class CenterOfMass(Term):
     the linear tolerance. Masses and centres of mass come from the URDF's ``<inertial>`` (Pinocchio's model).
     """
 
+    task_type, task_keys = "center_of_mass", ("target", "axes")
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> CenterOfMass:
+        return cls(entry.value("target"), axes=entry.text("axes", "xyz"), name=entry.name)
+
     level = "task"
     has_target = True
 
@@ -63,7 +120,7 @@ class CenterOfMass(Term):
         names, fractions = mass_points(robot)
         mask = [float(a in self.axes) for a in "xyz"]
         params = np.concatenate([self.target, mask, fractions])
-        return (Block(B.COM, B.NORM, len(self.axes), names, params, tolerance=B.TOL_LINEAR),)
+        return (Block(COM, B.NORM, len(self.axes), names, params, tolerance=B.TOL_LINEAR),)
 
     def __repr__(self) -> str:
         return f"CenterOfMass({np.round(self.target, 6).tolist()}, axes={self.axes!r})"

@@ -9,8 +9,30 @@ import numpy as np
 from ..errors import TaskError
 from ..robot import Robot, check_bounds
 from . import blocks as B
-from .base import Term
+from .base import Term, TermEntry
+from .kinds import BlockKind
 from .program import Block
+from .workspace import RESIDUAL, views
+
+
+def limits_residual(ws) -> int:
+    """``min(0, x − l) + max(0, x − u)`` per coordinate (n); Jacobian ``1`` outside the limits, 0 inside."""
+    v = views(ws)
+    block, row, n = v.blocks[ws.block], ws.row, ws.n
+    p = block.params
+    for k in range(n):
+        lo, hi = v.params[p + k], v.params[p + n + k]
+        value = v.x[k]
+        v.r[row + k] = value - lo if value < lo else (value - hi if value > hi else 0.0)
+        if ws.mode != RESIDUAL:
+            for i in range(n):
+                v.J[row + k, i] = 0.0
+            v.J[row + k, k] = 1.0 if (value < lo or value > hi) else 0.0
+    return n
+
+
+#: Limit violations of every coordinate: params ``l`` (n), ``u`` (n).
+LIMITS = BlockKind("joint limits", limits_residual)
 
 
 class JointLimitPenalty(Term):
@@ -19,6 +41,12 @@ class JointLimitPenalty(Term):
     Limits default to the robot's search bounds; pass ``lower``/``upper`` ``(n,)`` for others. Zero inside.
     A ``"value"`` term: the local engine keeps every step inside the box, where it is zero.
     """
+
+    task_type, task_keys = "joint_limits", ()
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> JointLimitPenalty:
+        return cls(name=entry.name or "joint_limits")
 
     level = "value"
     penalizes_limits = True  # the problem's "penalty" bounds mode adds one unless the objective has one
@@ -47,4 +75,4 @@ class JointLimitPenalty(Term):
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         lower, upper = self.limits(robot)
-        return (Block(B.LIMITS, B.L1, robot.n, params=np.concatenate([lower, upper]), scale=self.weight),)
+        return (Block(LIMITS, B.L1, robot.n, params=np.concatenate([lower, upper]), scale=self.weight),)

@@ -10,8 +10,41 @@ from ..errors import TaskError
 from ..robot import Robot
 from ..validate import all_finite
 from . import blocks as B
-from .base import Term
-from .program import Block, coordinates_block
+from .base import Term, TermEntry
+from .kinds import BlockKind
+from .lie import wrap_angle
+from .program import Block
+from .workspace import RESIDUAL, views
+
+
+def coordinates_residual(ws) -> int:
+    """``x[idx] − x₀`` (differences of continuous joints wrapped to ``[−π, π)``); unit Jacobian rows."""
+    v = views(ws)
+    block, row = v.blocks[ws.block], ws.row
+    p, q, n = block.params, block.indices, ws.n
+    for c in range(block.rows):
+        k = v.indices[q + c]
+        d = v.x[k] - v.params[p + c]
+        v.r[row + c] = wrap_angle(d) if v.wraps[k] else d
+        if ws.mode != RESIDUAL:
+            for i in range(n):
+                v.J[row + c, i] = 0.0
+            v.J[row + c, k] = 1.0
+    return block.rows
+
+
+#: Coordinates of the robot against values: ``x[idx] − x₀`` (count) [rad or m], params ``x₀`` (count); linear in
+#: ``x`` (no curvature).
+COORDINATES = BlockKind("coordinates", coordinates_residual, unit_rows=True)
+
+
+def coordinates_block(indices: Sequence[int], previous: np.ndarray, rho: int, scale: float = 1.0) -> Block:
+    """A :data:`COORDINATES` block ``x[indices] − previous`` (differences of continuous joints wrapped)."""
+    indices = np.asarray(indices, dtype=np.int64)
+    if indices.size == 0:
+        raise TaskError("a joint-space term needs at least one coordinate")
+    return Block(COORDINATES, rho, int(indices.size), params=np.asarray(previous, dtype=float), indices=indices,
+                 scale=scale)
 
 NORMS = ("l2", "l1")
 
@@ -29,6 +62,14 @@ class Motion(Term):
     the group's values ``(n_g,)``; ``group`` is a group name (``"base"``, ``"arm1"``, ``"all"``) or a joint name.
     Residual ``x_g − x_g^prev`` [rad / m], with differences of continuous joints wrapped to ``[−π, π)``.
     """
+
+    task_type, task_keys, category = "motion", ("group", "previous", "norm"), "motion"
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> Motion:
+        """``previous`` defaults to the case's configuration before it (the previous waypoint's along a path)."""
+        previous = entry.value("previous") if entry.has("previous") else entry.previous
+        return cls(entry.text("group"), previous, norm=entry.text("norm", "l2"), name=entry.name)
 
     level = "regularizer"
     has_target = True
@@ -93,6 +134,12 @@ class JointTarget(Motion):
     ``(n_g,)``. Reached first like every task term; its error is held to the angular tolerance [rad], or to the
     linear one [m] when the group holds a translation (prismatic or planar coordinates).
     """
+
+    task_type, task_keys, category = "joint_target", ("group", "target"), None
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> JointTarget:
+        return cls(entry.text("group"), entry.value("target"), name=entry.name)
 
     level = "task"
 

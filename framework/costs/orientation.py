@@ -13,11 +13,70 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
+from ..native import internal, matrix
 from ..robot import Robot
 from ..rotations import rotation_defects, rotation_target
 from . import blocks as B
-from .base import Term, finite_rows
+from .base import Term, TermEntry, finite_rows
+from .curvature import chain_curvature
+from .kinds import BlockKind
+from .lie import left_jacobian_inverse, rotation_log
 from .program import Block
+from .workspace import JACOBIAN_ONLY, RESIDUAL, views
+
+
+def orientation_residual(ws) -> int:
+    """``log(R_tᵀ R_a)`` (3) [rad], its norm the angle; Jacobian ``J_l⁻¹(r) R_tᵀ J_ω,a``. In mode
+    :data:`~.workspace.JACOBIAN_ONLY` the Jacobian comes from the rows already there (no second logarithm)."""
+    v = views(ws)
+    block, row = v.blocks[ws.block], ws.row
+    p, fa = block.params, block.fa
+    if ws.mode != JACOBIAN_ONLY:
+        E = v.scratch[9:18]
+        for a in range(3):
+            for c in range(3):  # E = R_tᵀ R
+                E[3 * a + c] = (v.params[p + a] * v.poses[fa, c] + v.params[p + 3 + a] * v.poses[fa, 3 + c]
+                                + v.params[p + 6 + a] * v.poses[fa, 6 + c])
+        rotation_log(E, v.r[row : row + 3])
+    if ws.mode != RESIDUAL:
+        orientation_jacobian(v.jacobians, fa, v.params, p, v.r, v.J, row, ws.n, matrix(v.scratch, 3, 3))
+    return 3
+
+
+@internal
+def orientation_jacobian(jacobians, fa, params, p, r, J, row, n, L3) -> None:
+    """``J[row:row + 3] = J_l⁻¹(r) R_tᵀ J_ω`` of an orientation block with residual ``r[row:row + 3] = log(R_tᵀ R)``
+    (``R_t``: the target rotation, row-major at ``params[p:p + 9]``); ``L3 (3, 3)`` scratch."""
+    left_jacobian_inverse(r[row : row + 3], L3)
+    for a in range(3):
+        m0 = L3[a, 0] * params[p] + L3[a, 1] * params[p + 1] + L3[a, 2] * params[p + 2]
+        m1 = L3[a, 0] * params[p + 3] + L3[a, 1] * params[p + 4] + L3[a, 2] * params[p + 5]
+        m2 = L3[a, 0] * params[p + 6] + L3[a, 1] * params[p + 7] + L3[a, 2] * params[p + 8]
+        for i in range(n):  # row a of J_l⁻¹ R_tᵀ times J_ω
+            J[row + a, i] = m0 * jacobians[fa, 3, i] + m1 * jacobians[fa, 4, i] + m2 * jacobians[fa, 5, i]
+
+
+def orientation_second_order(ws) -> int:
+    """``Σ μ_c ∇²r_c`` of ``r = log(R_tᵀ R_a)``: ``½ μ'·(ω_i × ω_j)`` over the chain with ``μ' = R_t J_l⁻ᵀ μ`` —
+    exact on the target (``r = 0``)."""
+    v = views(ws)
+    block, row, mu = v.blocks[ws.block], ws.row, v.multipliers
+    p, fa = block.params, block.fa
+    L = matrix(v.scratch, 3, 3)
+    left_jacobian_inverse(v.r[row : row + 3], L)
+    v0 = L[0, 0] * mu[0] + L[1, 0] * mu[1] + L[2, 0] * mu[2]  # J_l⁻ᵀ μ
+    v1 = L[0, 1] * mu[0] + L[1, 1] * mu[1] + L[2, 1] * mu[2]
+    v2 = L[0, 2] * mu[0] + L[1, 2] * mu[1] + L[2, 2] * mu[2]
+    m0 = v.params[p] * v0 + v.params[p + 1] * v1 + v.params[p + 2] * v2
+    m1 = v.params[p + 3] * v0 + v.params[p + 4] * v1 + v.params[p + 5] * v2
+    m2 = v.params[p + 6] * v0 + v.params[p + 7] * v1 + v.params[p + 8] * v2
+    chain_curvature(fa, 0.5 * m0, 0.5 * m1, 0.5 * m2, v.jacobians[fa, 3:6], v.jacobians, v.chain_ptr, v.chain_idx,
+                    v.hessian)
+    return 0
+
+
+#: A frame's rotation against a world rotation: ``log(R_tᵀ R_a)`` (3) [rad], params ``R_t`` (9, row-major).
+ORIENTATION = BlockKind("orientation", orientation_residual, orientation_second_order)
 
 
 class Orientation(Term):
@@ -27,6 +86,12 @@ class Orientation(Term):
     order named: ``quat_xyzw=`` (scipy's order) or ``quat_wxyz=`` (Eigen's constructor order, ROS messages spell
     out x, y, z, w). A bare 4-vector as ``target`` is read as ``(x, y, z, w)``.
     """
+
+    task_type, task_keys, category = "orientation", ("frame", "target"), "orientation"
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> Orientation:
+        return cls(entry.text("frame"), entry.value("target"), name=entry.name)
 
     level = "task"
     has_target = True
@@ -59,4 +124,4 @@ class Orientation(Term):
         return R.reshape(-1, 9)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
-        return (Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, self.target.ravel(), tolerance=B.TOL_ANGULAR),)
+        return (Block(ORIENTATION, B.HALFSIN, 3, self.frames, self.target.ravel(), tolerance=B.TOL_ANGULAR),)

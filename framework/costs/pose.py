@@ -11,7 +11,9 @@ from ..errors import TaskError
 from ..robot import Robot
 from ..rotations import pack_transform, rotation_defects, rotation_from
 from . import blocks as B
-from .base import Term, as_vector, finite_rows
+from .base import Term, TermEntry, as_vector, finite_rows
+from .orientation import ORIENTATION
+from .position import POSITION
 from .program import Block
 
 
@@ -62,6 +64,12 @@ class Pose(Term):
     rotation)`` pair, in the world frame.
     """
 
+    task_type, task_keys = "pose", ("frame", "position", "rotation")
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> Pose:
+        return cls(entry.text("frame"), (entry.value("position"), entry.value("rotation")), name=entry.name)
+
     level = "task"
     has_target = True
     fixed_layout = True
@@ -111,8 +119,8 @@ class Pose(Term):
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         p = self._parameters
-        return (Block(B.POSITION, B.NORM, 3, self.frames, p[:3], tolerance=B.TOL_LINEAR),
-                Block(B.ORIENTATION, B.HALFSIN, 3, self.frames, p[3:], tolerance=B.TOL_ANGULAR))
+        return (Block(POSITION, B.NORM, 3, self.frames, p[:3], tolerance=B.TOL_LINEAR),
+                Block(ORIENTATION, B.HALFSIN, 3, self.frames, p[3:], tolerance=B.TOL_ANGULAR))
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         return {self.frame: self.position}

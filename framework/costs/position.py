@@ -6,10 +6,47 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..native import internal
 from ..robot import Robot
 from . import blocks as B
-from .base import Term, as_vector, finite_rows
+from .base import Term, TermEntry, as_vector, finite_rows
+from .curvature import position_curvature
+from .kinds import BlockKind
 from .program import Block
+from .workspace import JACOBIAN_ONLY, RESIDUAL, views
+
+
+def position_residual(ws) -> int:
+    """``p_a − t`` (3) [m] at rows ``ws.row``; Jacobian ``J_p,a``."""
+    v = views(ws)
+    block, row = v.blocks[ws.block], ws.row
+    p, fa = block.params, block.fa
+    if ws.mode != JACOBIAN_ONLY:
+        for c in range(3):
+            v.r[row + c] = v.poses[fa, 9 + c] - v.params[p + c]
+    if ws.mode != RESIDUAL:
+        translation_jacobian(v.jacobians, fa, -1, v.J, row, ws.n)
+    return 3
+
+
+def position_second_order(ws) -> int:
+    """``Σ μ_c ∇²(p_a)_c``: exact (the product of exponentials)."""
+    v = views(ws)
+    fa, mu = v.blocks[ws.block].fa, v.multipliers
+    position_curvature(fa, mu[0], mu[1], mu[2], v.jacobians, v.chain_ptr, v.chain_idx, v.hessian)
+    return 0
+
+
+@internal
+def translation_jacobian(jacobians, f, minus, J, row, n) -> None:
+    """``J[row:row + 3]``: the translation rows of frame ``f``'s Jacobian, less frame ``minus``'s (``-1``: none)."""
+    for c in range(3):
+        for i in range(n):
+            J[row + c, i] = jacobians[f, c, i] if minus < 0 else jacobians[f, c, i] - jacobians[minus, c, i]
+
+
+#: A frame's origin at a world point: ``p_a − t`` (3) [m], params ``t`` (3).
+POSITION = BlockKind("position", position_residual, position_second_order)
 
 
 class Position(Term):
@@ -17,6 +54,12 @@ class Position(Term):
 
     Residual ``p_frame(x) − target`` (3,) [m]; a task term held to the linear tolerance.
     """
+
+    task_type, task_keys, category = "position", ("frame", "target"), "position"
+
+    @classmethod
+    def from_entry(cls, entry: TermEntry) -> Position:
+        return cls(entry.text("frame"), entry.value("target"), name=entry.name)
 
     level = "task"
     has_target = True
@@ -41,7 +84,7 @@ class Position(Term):
         return self.target
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
-        return (Block(B.POSITION, B.NORM, 3, self.frames, self.target, tolerance=B.TOL_LINEAR),)
+        return (Block(POSITION, B.NORM, 3, self.frames, self.target, tolerance=B.TOL_LINEAR),)
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         return {self.frame: self.target}

@@ -15,11 +15,14 @@ from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
-from ..errors import ConfigurationError, TaskError
+from ..errors import ConfigurationError
 from ..robot import JointKind, Robot
 from ..validate import float_copy
 from . import blocks as B
 from .kernels import population_cost, population_values, task_errors_at
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .kinds import BlockKind
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..hulls import HullPair
@@ -30,20 +33,22 @@ _LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_
 
 
 class Block(NamedTuple):
-    """One residual block of a term (see :mod:`framework.costs.blocks` for the kinds).
+    """One residual block of a term (see :mod:`framework.costs.blocks`).
 
     Attributes:
-        kind: ``POSITION``, ``ORIENTATION``, ``RELATIVE``, ``COORDINATES`` or ``LIMITS``.
+        kind: what it computes (:class:`~framework.costs.kinds.BlockKind`, defined with its term).
         rho: how the residual becomes the value: ``NORM``, ``HALFSIN``, ``L1`` or ``SQUARED``.
         rows: residual size.
-        frames: the frames it reads (``a`` then ``b``).
+        frames: the frames it reads (``a`` then ``b``; a kind with ``frame_indices`` reads them all).
         params: its target parameters (position, row-major rotation, offset, previous values, limits).
-        indices: coordinates of a ``COORDINATES`` block.
+        indices: its coordinates (a kind with ``unit_rows``); frames of a kind with ``frame_indices`` are listed
+            by ``frames`` instead.
         scale: factor of ρ (``1 / (n π)`` for paper 002's normalized L1 motion, δ for the limit penalty).
         tolerance: ``TOL_LINEAR`` [m], ``TOL_ANGULAR`` [rad] or ``TOL_NONE``: which tolerance ``‖r‖`` is held to.
+        scratch: the float entries its kernel's scratch needs.
     """
 
-    kind: int
+    kind: BlockKind
     rho: int
     rows: int
     frames: tuple[str, ...] = ()
@@ -51,11 +56,13 @@ class Block(NamedTuple):
     indices: np.ndarray | None = None
     scale: float = 1.0
     tolerance: int = B.TOL_NONE
+    scratch: int = 18
 
     def signature(self) -> tuple:
         """Everything but the parameters' values: blocks of equal signatures pack into the same layout."""
         indices = None if self.indices is None else self.indices.tobytes()
-        return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, len(self.params), indices)
+        return (self.kind, self.rho, self.rows, self.frames, self.scale, self.tolerance, len(self.params), indices,
+                self.scratch)
 
 
 def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
@@ -71,7 +78,7 @@ def unique_labels(names: Iterable[str]) -> tuple[str, ...]:
 def _kind(level: int, blocks: tuple[Block, ...] | None) -> str:
     """What a term measures, for reports: ``"position"`` (all its blocks in metres), ``"orientation"`` (all in
     radians), ``"motion"`` (a regularizer), ``"collision"`` (contact rows: clearances, not errors), ``"other"``."""
-    if blocks and all(b.kind in (B.SPHERES, B.SOLIDS) for b in blocks):
+    if blocks and all(b.kind.contact for b in blocks):
         return "collision"
     tolerances = {b.tolerance for b in blocks or ()}
     if level == B.LEVEL_TASK and tolerances == {B.TOL_LINEAR}:
@@ -111,40 +118,47 @@ class _Layout:
         self.kin = kinematics.tables
         self.chains = kinematics.chains
         slot = {f: i for i, f in enumerate(frames)}
-        rows, indices, scales, self.block_term = [], [], [], []
+        rows, indices, self.block_term, kinds = [], [], [], []
         self.param_spans: list[tuple[int, int]] = []  # per term: its blocks' parameters, contiguous
-        references: list[tuple[int, slice, slice]] = []  # (term, params, idx) of the regularizers' COORDINATES blocks
+        references: list[tuple[int, slice, slice]] = []  # (term, params, idx) of the regularizers' unit-row blocks
         pptr = iptr = 0
+        scratch = 9
         for k, (level, blocks) in enumerate(zip(levels, packed)):
             first = pptr
             for block in blocks or ():
                 count = 0
-                if block.kind == B.COORDINATES:
-                    indices.append(np.asarray(block.indices, dtype=np.int64))
-                    count = indices[-1].size
-                elif block.kind == B.COM:  # the mass points' frame slots
+                kind = block.kind
+                if kind.frame_indices:  # the frames it reads, by slot
                     indices.append(np.array([slot[f] for f in block.frames], dtype=np.int64))
                     count = indices[-1].size
+                elif block.indices is not None:
+                    indices.append(np.asarray(block.indices, dtype=np.int64))
+                    count = indices[-1].size
                 size = int(np.size(block.params))
-                fa = slot[block.frames[0]] if block.frames else -1
-                fb = slot[block.frames[1]] if len(block.frames) > 1 else -1
-                rows.append([block.kind, block.rho, block.tolerance, level, block.rows, fa, fb, pptr, iptr, k, count])
+                fa = slot[block.frames[0]] if block.frames and not kind.frame_indices else -1
+                fb = slot[block.frames[1]] if len(block.frames) > 1 and not kind.frame_indices else -1
+                kinds.append(kind)
+                rows.append((level, block.rows, block.rho, block.tolerance, kind.flags, fa, fb, pptr, iptr, count, k,
+                             0, 0, kind.margin, 0.0, block.scale))
                 self.block_term.append(k)
-                scales.append(block.scale)
-                if block.kind == B.COORDINATES and level == B.LEVEL_REGULARIZER:
+                scratch = max(scratch, block.scratch)
+                if kind.unit_rows and level == B.LEVEL_REGULARIZER:
                     references.append((k, slice(pptr, pptr + size), slice(iptr, iptr + count)))
                 pptr += size
                 iptr += count
             self.param_spans.append((first, pptr))
-        self.bint = np.array(rows, dtype=np.int64).reshape(-1, 11)
+        #: the block table (:data:`~framework.costs.blocks.BLOCK`), weights 0 (see :meth:`table`)
+        self.blocks = np.array(rows, dtype=B.BLOCK)
+        #: each block's kind
+        self.kinds = tuple(kinds)
+        self._link()
         self.block_term = np.array(self.block_term, dtype=np.int64)
-        self.scales = np.array(scales, dtype=float)
         self.idx = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int64)
         self.wrap = wrapping_coordinates(robot)
-        task = self.bint[:, B.LEVEL] == B.LEVEL_TASK
-        self.task_tolerances = self.bint[task, B.TOL]
-        self.task_block_rows = self.bint[task, B.ROWS]
-        self.levels_present = frozenset(self.bint[:, B.LEVEL].tolist())
+        task = self.blocks["level"] == B.LEVEL_TASK
+        self.task_tolerances = self.blocks["tolerance"][task]
+        self.task_block_rows = self.blocks["rows"][task]
+        self.levels_present = frozenset(self.blocks["level"].tolist())
         self.term_kinds = tuple(_kind(level, blocks) for level, blocks in zip(levels, packed))
         self.generic = [k for k, p in enumerate(packed) if p is None]
         self.packed_terms = tuple(k for k, p in enumerate(packed) if p)  # the terms whose parameters are packed
@@ -165,7 +179,7 @@ class _Layout:
         # contacts; their sphere rows may overlap at an answer coal finds clear)
         self.task_terms = tuple(k for k, level in enumerate(levels)
                                 if level == B.LEVEL_TASK and self.term_kinds[k] != "collision")
-        self._bflt: dict[tuple[float, ...], np.ndarray] = {}
+        self._tables: dict[tuple[float, ...], np.ndarray] = {}
         self.task_angular = tuple((self.task_tolerances == B.TOL_ANGULAR).tolist())
         self.task_checked_exactly = tuple(bool(terms[k].checks_collisions) for k in self.block_term[task].tolist())
         #: ``(block, angular)`` of every task block, and of those the exact collision check does not replace
@@ -177,15 +191,31 @@ class _Layout:
         #: ``int64 (r,)`` twice: the parameters that hold the regularizers' reference configuration, and the
         #: coordinates each holds (``params[slots] = x[coordinates]`` moves the reference to ``x``)
         self.reference_slots = self.references_of(range(len(terms)))
-        #: the parts of a program's ``prog`` after its parameters, and the attributes every program of this layout
-        #: has (:class:`Program` copies them in one update)
-        self.prog_tail = (self.idx, self.wrap, *self.chains)
+        #: the scratch entries the blocks' kernels need (a ``Packed`` field)
+        self.scratch = np.array([scratch], dtype=np.int64)
+        #: the attributes every program of this layout has (:class:`Program` copies them in one update)
         self.shared = {
-            "frames": self.frames, "kin": self.kin, "wrap": self.wrap, "task_tolerances": self.task_tolerances,
+            "frames": self.frames, "wrap": self.wrap, "task_tolerances": self.task_tolerances,
             "task_block_rows": self.task_block_rows, "task_angular": self.task_angular,
             "task_checked_exactly": self.task_checked_exactly, "task_rows": self.task_rows,
             "task_blocks": self.task_blocks, "term_kinds": self.term_kinds,
             "has_regularizers": B.LEVEL_REGULARIZER in self.levels_present}
+
+    def _link(self) -> None:
+        """The block table's kernel addresses, this process's (the kinds' kernels compiled or loaded on first use)."""
+        for b, kind in enumerate(self.kinds):
+            self.blocks[b]["residual"], self.blocks[b]["curvature"] = kind.addresses()
+
+    def __getstate__(self) -> dict:
+        """Pickled without what holds this process's addresses (compiled entries, weighted tables); unpickled, the
+        kernels' addresses are the unpickling process's."""
+        state = dict(self.__dict__)
+        state["entries"], state["_tables"] = {}, {}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._link()
 
     def references_of(self, terms: Iterable[int]) -> tuple[np.ndarray, np.ndarray]:
         """:attr:`reference_slots` of the terms ``terms`` (indices in objective order) alone."""
@@ -196,27 +226,45 @@ class _Layout:
         return (np.concatenate([np.arange(p.start, p.stop) for p, _ in picked]).astype(np.int64),
                 np.concatenate([self.idx[i] for _, i in picked]).astype(np.int64))
 
-    def bflt(self, weights: tuple[float, ...]) -> np.ndarray:
-        """The ``(blocks, 2)`` table of weights and scales for the terms' ``weights`` (built once per weights)."""
-        table = self._bflt.get(weights)
+    def table(self, weights: tuple[float, ...]) -> np.ndarray:
+        """The block table with the terms' ``weights`` (built once per weights; read-only use)."""
+        table = self._tables.get(weights)
         if table is None:
-            if len(self._bflt) > 64:
-                self._bflt.clear()
-            table = np.empty((self.scales.size, 2))
-            table[:, 0] = np.asarray(weights)[self.block_term] if self.scales.size else 0.0
-            table[:, 1] = self.scales
-            self._bflt[weights] = table
+            if len(self._tables) > 64:
+                self._tables.clear()
+            table = self.blocks.copy()
+            if table.size:
+                table["weight"] = np.asarray(weights)[self.block_term]
+            self._tables[weights] = table
         return table
+
+    def packed(self, blocks: np.ndarray, params: np.ndarray) -> B.Packed:
+        """The arrays of a program of this layout with its block table and parameters."""
+        joints, joint_geometry, frame_joints, frame_geometry = self.kin
+        return B.Packed(joints, joint_geometry, frame_joints, frame_geometry, *self.chains, blocks, params, self.idx,
+                        self.wrap, self.scratch)
 
 
 class Program:
     """An objective's terms as packed arrays for :mod:`framework.costs.kernels` and the local engine.
 
     Attributes:
-        kin: ``(jint, jgeo, fslot, fgeo)``, the population-FK tables of every frame the blocks read.
-        prog: ``(bint, bflt, params, idx, wrap, chain_ptr, chain_idx)``, the blocks.
+        packed: the arrays the compiled code reads (:class:`~framework.costs.blocks.Packed`: the population-FK
+            tables of every frame the blocks read, the block table, the parameters, ...).
         task_blocks: a name for each task block's error, in block order (``"position[ee]"``, ...).
     """
+
+    def __getstate__(self) -> dict:
+        """Pickled with its parameters, not its packed arrays (their block table holds this process's kernel
+        addresses): unpickled, they are packed again from its layout."""
+        state = dict(self.__dict__)
+        state["packed"] = state["packed"].params
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        params = state.pop("packed")
+        self.__dict__.update(state)
+        self.packed = self.layout.packed(self.layout.table(self.weight_list), params)
 
     def __init__(self, robot: Robot, objective: Objective):
         pairs = objective.terms
@@ -236,7 +284,7 @@ class Program:
             params = np.concatenate(flat, dtype=float, casting="unsafe") if flat else np.zeros(0)
         self.__dict__.update(layout.shared)  # what every program of the layout reads from it (see _Layout.shared)
         self.robot, self.terms, self.weight_list, self.layout = robot, terms, weights, layout
-        self.prog = (layout.bint, layout.bflt(weights), params, *layout.prog_tail)
+        self.packed = layout.packed(layout.table(weights), params)
         self._versions = list(map(_VERSION, terms))
 
     @cached_property
@@ -259,7 +307,7 @@ class Program:
         X = np.ascontiguousarray(np.atleast_2d(x), dtype=float)
         errors = np.empty((X.shape[0], self.task_block_rows.size))
         if errors.size:
-            task_errors_at(X, self.kin, self.prog, errors)
+            task_errors_at(X, self.packed, errors)
         return errors if np.ndim(x) == 2 else errors[0]
 
     def limits(self, tolerance: float, angle_tolerance: float) -> np.ndarray:
@@ -292,7 +340,7 @@ class Program:
         """Write the configuration the regularizers pull towards into ``x`` ``(n,)`` (only the coordinates they
         cover); returns whether there is any."""
         slots, coordinates = self.layout.reference_slots
-        x[coordinates] = self.prog[2][slots]
+        x[coordinates] = self.packed.params[slots]
         return bool(slots.size)
 
     def refresh(self) -> None:
@@ -302,7 +350,7 @@ class Program:
             if term.version != versions[k]:
                 versions[k] = term.version
                 start, stop = self.layout.param_spans[k]
-                self.prog[2][start:stop] = term.parameters(self.robot)
+                self.packed.params[start:stop] = term.parameters(self.robot)
 
     def cost(self, X: np.ndarray) -> np.ndarray:
         """``(pop,)`` weighted sums of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
@@ -310,14 +358,14 @@ class Program:
             return self.values(X) @ self.weights
         self.refresh()
         F = np.empty(X.shape[0])
-        _check_finite(X, population_cost(X, self.kin, self.prog, F))
+        _check_finite(X, population_cost(X, self.packed, F))
         return F
 
     def values(self, X: np.ndarray) -> np.ndarray:
         """``(pop, terms)`` unweighted values of a population ``X`` ``(pop, n)`` (float64, C-contiguous)."""
         self.refresh()
         V = np.zeros((X.shape[0], len(self.terms)))
-        _check_finite(X, population_values(X, self.kin, self.prog, V))
+        _check_finite(X, population_values(X, self.packed, V))
         generic = self.layout.generic
         if generic:
             frames = tuple(dict.fromkeys(f for k in generic for f in self.terms[k].frames))
@@ -331,12 +379,3 @@ def _check_finite(X: np.ndarray, bad: int) -> None:
     """Raise for row ``bad`` of ``X`` if a kernel found NaN or inf there (``bad < 0``: none)."""
     if bad >= 0:
         raise ConfigurationError(f"configuration holds NaN or inf (row {bad}: {X[bad].tolist()})")
-
-
-def coordinates_block(indices: Sequence[int], previous: np.ndarray, rho: int, scale: float = 1.0) -> Block:
-    """A ``COORDINATES`` block ``x[indices] − previous`` (differences of continuous joints wrapped)."""
-    indices = np.asarray(indices, dtype=np.int64)
-    if indices.size == 0:
-        raise TaskError("a joint-space term needs at least one coordinate")
-    return Block(B.COORDINATES, rho, int(indices.size), params=np.asarray(previous, dtype=float),
-                 indices=indices, scale=scale)

@@ -19,76 +19,93 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
-import numba
 import numpy as np
 
 from ..costs.kernels import NO
 from ..costs.program import Program
-from . import newton
+from ..native import compiled
+from . import regularize as newton_phase
 from .clock import monotonic_ns
 from .local import LocalSettings, search_box
 from .reach import REACHED, reach
+from .settings import NewtonSettings, ReachSettings, Report
+from .steps import copy
 
 #: Items per compiled call at most (the unit of work a thread takes, and of progress reports).
 CHUNK = 256
 
 
-@numba.njit(cache=True, nogil=True)
-def descend(items, X, restarts, streams, P, chained, reference, lower, upper, box_wrap, kin, prog, tol_linear,
-            tol_angular, max_iterations, stall, budget_ns, polish, regularize, regularize_iterations, smoothing,
-            task_rows, E, V, codes, regularized, counts, spent_ns) -> int:
-    """Solve the items ``items`` of a batch in place, one after the other.
+class BatchSettings(NamedTuple):
+    """What every item of a batch is solved with (see :class:`~framework.engine.local.LocalSettings`)."""
 
-    Args:
-        items: ``int64 (k,)`` item indices.
-        X: ``(B, n)`` starts; on return each solved item's configuration.
-        chained: the items are consecutive waypoints of a path: item ``items[t]`` starts at the answer of
-            ``items[t - 1]`` (the first at its own row of ``X``), the parameters ``reference`` holds are written from
-            that start (``params[reference[0]] = x[reference[1]]``: the motion terms' reference, the previous
-            solution), and the loop stops at the first item that misses the task.
-        restarts: random restarts allowed per item; streams: ``uint64 (B,)`` each item's restart stream
-            (:mod:`~framework.engine.draws`), advanced.
-        P: ``(B, p)`` each item's program parameters (written into ``prog[2]`` before its solve).
-        max_iterations: ``int64 (B,)`` Levenberg-Marquardt iterations left per item.
-        budget_ns: ``int64 (B,)`` nanoseconds left per item (``<= 0`` in the first entry: no budget).
-        regularize: minimize the regularizers after reaching the task; task_rows: the task's residual rows.
-        E: ``(B, blocks)`` out: task block errors; V: ``(B, terms)`` out: term values.
-        codes: ``int64 (B,)`` out: :func:`reach`'s status; regularized: ``int64 (B,)`` out:
-            :func:`~.newton.regularize`'s status (``-1``: not run); counts: ``int64 (B, 3)`` iterations, evaluations
-            and restarts, added to; spent_ns: ``int64 (B,)`` time spent, added to.
+    restarts: int  # random restarts allowed per item
+    chained: bool  # the items are consecutive waypoints of a path (see :func:`descend`)
+    tol_linear: float
+    tol_angular: float
+    stall: int
+    polish: int
+    regularize: bool  # minimize the regularizers after reaching the task
+    regularize_iterations: int
+    smoothing: float
+    task_rows: int
 
-    Returns:
-        The number of items solved: all of them, or (chained) the position of the first that missed the task.
+
+class Items(NamedTuple):
+    """A batch's inputs per item: starts ``X (B, n)`` (on return each solved item's configuration), program
+    parameters ``P (B, p)``, restart streams ``uint64 (B,)``, Levenberg-Marquardt iterations left ``int64 (B,)``,
+    nanoseconds left ``int64 (B,)`` (``<= 0`` in the first entry: no budget)."""
+
+    X: np.ndarray
+    P: np.ndarray
+    streams: np.ndarray
+    max_iterations: np.ndarray
+    budget_ns: np.ndarray
+
+
+@compiled(nogil=True)
+def descend(items, inputs, reference, box, packed, settings, state) -> int:
+    """Solve the items ``items`` (``int64 (k,)`` indices) of a batch in place, one after the other.
+
+    ``inputs``: :class:`Items`; ``packed``: the problem, its parameters this thread's own (each item's ``P`` row is
+    written into them before its solve); ``settings``: :class:`BatchSettings`; ``state``: :class:`BatchState`, the
+    outputs. Chained, the items are consecutive waypoints of a path: item ``items[t]`` starts at the answer of
+    ``items[t - 1]`` (the first at its own row of ``X``), the parameters ``reference`` holds are written from that
+    start (``params[reference[0]] = x[reference[1]]``: the motion terms' reference, the previous solution), and
+    the loop stops at the first item that misses the task.
+
+    Returns the number of items solved: all of them, or (chained) the position of the first that missed the task.
     """
-    params = prog[2]
+    params = packed.params
     stats = np.empty(3, dtype=np.int64)
-    multipliers = np.zeros(task_rows)
+    multipliers = np.zeros(settings.task_rows)
     slots, coordinates = reference
     for t in range(items.shape[0]):
         i = items[t]
-        params[:] = P[i]
+        copy(params, inputs.P[i])
         begin = monotonic_ns()
-        deadline = begin + budget_ns[i] if budget_ns[i] > 0 else 0
-        x = X[i]
-        if chained:
+        deadline = begin + inputs.budget_ns[i] if inputs.budget_ns[i] > 0 else 0
+        x = inputs.X[i]
+        if settings.chained:
             if t > 0:
-                x[:] = X[items[t - 1]]
+                copy(x, inputs.X[items[t - 1]])
             for j in range(slots.shape[0]):
                 params[slots[j]] = x[coordinates[j]]
-        code = reach(x, NO, restarts, streams[i : i + 1], lower, upper, box_wrap, kin, prog, tol_linear, tol_angular,
-                     max_iterations[i], stall, deadline, polish, E[i], V[i], stats)
-        counts[i, 0] += stats[0]
-        counts[i, 1] += stats[1]
-        counts[i, 2] += stats[2]
-        regularized[i] = -1
-        if code == REACHED and regularize:
+        report = Report(state.E[i], state.V[i], stats)
+        code = reach(x, NO, inputs.streams[i : i + 1], box, packed,
+                     ReachSettings(settings.tol_linear, settings.tol_angular, inputs.max_iterations[i], settings.stall,
+                                   settings.polish, settings.restarts, deadline), report)
+        for k in range(3):
+            state.counts[i, k] += stats[k]
+        state.regularized[i] = -1
+        if code == REACHED and settings.regularize:
             multipliers[:] = 0.0
-            regularized[i] = newton.regularize(x, lower, upper, box_wrap, kin, prog, smoothing,
-                                               regularize_iterations, deadline, multipliers, E[i], V[i], stats)
-            counts[i, 1] += stats[1]
-        codes[i] = code
-        spent_ns[i] += monotonic_ns() - begin
-        if chained and code != REACHED:
+            state.regularized[i] = newton_phase.regularize(
+                x, box, packed, NewtonSettings(settings.smoothing, settings.regularize_iterations, deadline),
+                multipliers, report)
+            state.counts[i, 1] += stats[1]
+        state.codes[i] = code
+        state.spent_ns[i] += monotonic_ns() - begin
+        if settings.chained and code != REACHED:
             return t
     return items.shape[0]
 
@@ -143,15 +160,13 @@ _NONE = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
 def _descend(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
              streams: np.ndarray, budget: np.ndarray, follows: tuple[np.ndarray, np.ndarray] | None) -> int:
-    lower, upper, box_wrap = search_box(program)
     left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
-    prog = list(program.prog)
-    prog[2] = prog[2].copy()  # the items' targets are written into these parameters
-    return descend(items, state.X, settings.max_restarts, streams, P, follows is not None, _NONE if follows is None else follows,
-                   lower, upper, box_wrap, program.kin, tuple(prog), settings.tolerance, settings.angular, left,
-                   settings.stall, budget, settings.polish, bool(settings.regularize and program.has_regularizers),
-                   settings.regularize_iterations, settings.smoothing, program.task_rows, state.E, state.V,
-                   state.codes, state.regularized, state.counts, state.spent_ns)
+    packed = program.packed._replace(params=program.packed.params.copy())  # the items' targets are written there
+    batch = BatchSettings(settings.max_restarts, follows is not None, settings.tolerance, settings.angular,
+                          settings.stall, settings.polish, bool(settings.regularize and program.has_regularizers),
+                          settings.regularize_iterations, settings.smoothing, program.task_rows)
+    return descend(items, Items(state.X, P, streams, left, budget), _NONE if follows is None else follows,
+                   search_box(program), packed, batch, state)
 
 
 def in_chunks(work: Callable[[np.ndarray], None], count: int, *, workers: int | None = None,

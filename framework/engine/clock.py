@@ -17,12 +17,14 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from ..native import internal
+
 #: ``CLOCK_MONOTONIC`` of the C library (Linux 1, macOS 6).
 _CLOCK_MONOTONIC = 6 if sys.platform == "darwin" else 1
 
 if sys.platform == "win32":  # pragma: no cover - no clock_gettime: compiled loops read a coarse clock instead
 
-    @numba.njit(cache=True)
+    @internal
     def monotonic_ns() -> int:
         with numba.objmode(now="int64"):
             now = time.monotonic_ns()
@@ -47,7 +49,7 @@ else:
 
         return types.int64(), codegen
 
-    @numba.njit(cache=True)
+    @internal
     def monotonic_ns() -> int:
         """Nanoseconds of the monotonic clock (the same clock as ``time.monotonic_ns()``)."""
         return _clock_gettime_ns()

@@ -10,10 +10,10 @@ in a single solve and in a batch alike; nothing is shared between streams.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from ..errors import SolverError
+from ..native import compiled, internal
 
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -43,7 +43,7 @@ def seed_of(seed: int | np.integer | np.random.Generator) -> int:
     return int(seed)
 
 
-@numba.njit(cache=True)
+@internal
 def uniform(state) -> float:
     """The next number of the stream ``state`` ``uint64 (1,)``, uniform in ``[0, 1)`` (53 random bits)."""
     state[0] += _GAMMA
@@ -54,14 +54,14 @@ def uniform(state) -> float:
     return float(z >> _S11) * _UNIT
 
 
-@numba.njit(cache=True)
+@internal
 def uniform_in_box(state, lower, upper, x) -> None:
     """``x (n,)`` drawn uniformly in the box ``[lower, upper]`` from the stream ``state``."""
     for i in range(x.shape[0]):
         x[i] = lower[i] + (upper[i] - lower[i]) * uniform(state)
 
 
-@numba.njit(cache=True)
+@compiled
 def draws(state, lower, upper, count):
     """``(count, n)`` configurations drawn uniformly in the box (for tests and callers outside compiled code)."""
     out = np.empty((count, lower.shape[0]))

@@ -23,8 +23,7 @@ import pinocchio as pin
 
 from ..costs import Objective, Program
 from ..hulls import HullPair
-from .local import LocalResult, LocalSettings, residuals, search_box
-from .reach import project
+from .local import LocalResult, LocalSettings, project_into_box, residuals, search_box
 
 #: Distance kept beyond the margin [m]: a hull pair exactly at the margin reads as touching in coal's check.
 BUFFER = 1e-4
@@ -157,9 +156,9 @@ def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = Local
     if not task.task_rows:
         return None
     pairs = HullRows(program, program.hull_pairs)
-    lower, upper, box_wrap = search_box(program)
+    box = search_box(program)
     x = np.array(x0, dtype=float)
-    project(x, lower, upper, box_wrap)
+    project_into_box(x, box)
     pairs.drop_nested_at(x)
     n = x.size
 
@@ -193,7 +192,7 @@ def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = Local
             damping *= DAMPING_UP
             continue
         xt = x + dx
-        project(xt, lower, upper, box_wrap)
+        project_into_box(xt, box)
         trial = rows(xt)
         evaluations += 1
         et = float(trial.r @ trial.r)

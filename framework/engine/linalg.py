@@ -6,24 +6,18 @@ numpy costs more in call overhead (and, on a shared 2-core machine, in OpenBLAS 
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
+from ..native import internal
 
-@numba.njit(cache=True)
+
+@internal
 def cholesky_solve(A, b, L, out) -> bool:
     """Solve ``A out = b`` for symmetric positive definite ``A (k, k)`` by Cholesky into ``out (k,)``.
 
     ``L (k, k)`` is scratch (its diagonal holds the reciprocals of the factor's). Returns False (``out``
     undefined) when ``A`` is not numerically positive definite.
     """
-    return _cholesky_solve(A, b, L, out)
-
-
-@numba.njit(cache=True, inline="always")
-def _cholesky_solve(A, b, L, out) -> bool:
-    """:func:`cholesky_solve`'s body, inlined where a step solves its system (a call costs a sixth of a 6 x 6
-    solve)."""
     k = A.shape[0]
     for j in range(k):  # column by column; the diagonal of L holds 1 / L_jj (one division per column)
         s = A[j, j]
@@ -51,7 +45,7 @@ def _cholesky_solve(A, b, L, out) -> bool:
     return True
 
 
-@numba.njit(cache=True)
+@internal
 def lu_solve(A, b, M, out) -> bool:
     """Solve ``A out = b`` for a square ``A (k, k)`` by Gaussian elimination with partial pivoting.
 
@@ -93,7 +87,7 @@ def lu_solve(A, b, M, out) -> bool:
     return True
 
 
-@numba.njit(cache=True)
+@internal
 def gram(Jr, damping, A):
     """``A = J Jᵀ + damping I`` for ``Jr (m, n)`` into ``A (m, m)``."""
     m, n = Jr.shape
@@ -107,7 +101,7 @@ def gram(Jr, damping, A):
         A[i, i] += damping
 
 
-@numba.njit(cache=True)
+@internal
 def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
     """``dx = −Jᵀ (J Jᵀ + damping I)⁻¹ r``: the (damped) least-norm Gauss-Newton step, ``Jr (m, n)``.
 
@@ -115,7 +109,7 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
     """
     m, n = Jr.shape
     gram(Jr, damping, A)
-    if not _cholesky_solve(A, r, L, y):
+    if not cholesky_solve(A, r, L, y):
         return False
     for c in range(n):
         s = 0.0
@@ -130,7 +124,7 @@ def least_norm_step(Jr, r, damping, A, L, y, dx) -> bool:
 DENSE_ROWS = 4
 
 
-@numba.njit(cache=True)
+@internal
 def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
     """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)``; ``A, L (n, n)``, ``g (n,)`` scratch.
 
@@ -146,7 +140,7 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
                 s -= Jr[p, i] * r[p]
             g[i] = s
         gram(Jr.T, damping, A)  # JᵀJ + λI: the Gram matrix of Jᵀ's rows
-        return _cholesky_solve(A, g, L, dx)
+        return cholesky_solve(A, g, L, dx)
     for i in range(n):
         g[i] = 0.0
         for j in range(i + 1):
@@ -172,10 +166,10 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
         A[i, i] += damping
         for j in range(i):
             A[j, i] = A[i, j]
-    return _cholesky_solve(A, g, L, dx)
+    return cholesky_solve(A, g, L, dx)
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def _moves(Jr, i) -> bool:
     """Whether column ``i`` of ``Jr`` has a nonzero entry (the rows depend on coordinate ``i`` here)."""
     for a in range(Jr.shape[0]):
@@ -184,7 +178,7 @@ def _moves(Jr, i) -> bool:
     return False
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def moving_columns(Jr, beyond) -> int:
     """How many columns of ``Jr (m, n)`` have a nonzero entry, counted until there are more than ``beyond``."""
     count = 0
@@ -196,7 +190,7 @@ def moving_columns(Jr, beyond) -> int:
     return count
 
 
-@numba.njit(cache=True)
+@internal
 def moving_columns_step(Jr, r, damping, A, L, g, dx, nz) -> bool:
     """``dx = −(JᵀJ + damping I)⁻¹ Jᵀ r`` for ``Jr (m, n)`` whose ``nz`` nonzero columns are the only ones solved
     for (the others' coordinates do not move the rows: their ``dx`` is 0, as the damped system gives them): the
@@ -225,7 +219,7 @@ def moving_columns_step(Jr, r, damping, A, L, g, dx, nz) -> bool:
             q += 1
         A[p, p] += damping
         p += 1
-    if not _cholesky_solve(A, g, L, dx[:nz]):
+    if not cholesky_solve(A, g, L, dx[:nz]):
         return False
     for i in range(n - 1, -1, -1):  # scattered back in place: the p-th moving column's value moves up to i >= p
         if _moves(Jr, i):
@@ -236,7 +230,7 @@ def moving_columns_step(Jr, r, damping, A, L, g, dx, nz) -> bool:
     return True
 
 
-@numba.njit(cache=True, inline="always")
+@internal
 def _reflect(V, beta, j, k, M, col) -> None:
     """Column ``col`` of ``M`` times the ``j``-th Householder reflection ``I − β_j v_j v_jᵀ`` (``v_j = V[j:k, j]``)."""
     s = 0.0
@@ -247,7 +241,7 @@ def _reflect(V, beta, j, k, M, col) -> None:
         M[i, col] -= s * V[i, j]
 
 
-@numba.njit(cache=True)
+@internal
 def null_space(A, W, V, beta, Z) -> int:
     """An orthonormal basis of the null space of ``A (m, k)`` into the columns of ``Z[:k, :nz]``; returns ``nz``
     (``k`` minus the numerical rank).
@@ -299,7 +293,7 @@ def null_space(A, W, V, beta, Z) -> int:
     return nz
 
 
-@numba.njit(cache=True)
+@internal
 def symmetric_eigen(S, k, E, V, w) -> None:
     """Eigenvalues ``w[:k]`` (ascending) and orthonormal eigenvectors (the columns of ``V[:k, :k]``) of the
     symmetric ``S[:k, :k]``: Householder reduction to tridiagonal form, then the QL algorithm with implicit shifts
@@ -309,6 +303,22 @@ def symmetric_eigen(S, k, E, V, w) -> None:
     for i in range(k):
         for j in range(k):
             a[i, j] = S[i, j]
+    _tridiagonal(a, d, e, k)
+    _tridiagonal_ql(a, d, e, k)
+    for i in range(k):  # ascending (selection sort, the vectors along)
+        j = i
+        for c in range(i + 1, k):
+            if w[c] < w[j]:
+                j = c
+        if j != i:
+            w[i], w[j] = w[j], w[i]
+            for r in range(k):
+                V[r, i], V[r, j] = V[r, j], V[r, i]
+
+
+@internal
+def _tridiagonal(a, d, e, k) -> None:
+    """Householder: ``a ← Qᵀ a Q`` tridiagonal (diagonal ``d``, off-diagonal ``e``), ``Q`` accumulated in ``a``."""
     for i in range(k - 1, 0, -1):  # Householder: a ← Qᵀ a Q tridiagonal, Q accumulated in a
         l = i - 1
         h = 0.0
@@ -362,6 +372,12 @@ def symmetric_eigen(S, k, E, V, w) -> None:
         for j in range(i):
             a[j, i] = 0.0
             a[i, j] = 0.0
+
+
+@internal
+def _tridiagonal_ql(a, d, e, k) -> None:
+    """QL with implicit shifts on the tridiagonal ``(d, e)``: the eigenvalues into ``d``, the rotations
+    accumulated in ``a`` (its columns the eigenvectors)."""
     for i in range(1, k):  # QL with implicit shifts on the tridiagonal (d, e), rotations accumulated in a
         e[i - 1] = e[i]
     e[k - 1] = 0.0
@@ -407,18 +423,9 @@ def symmetric_eigen(S, k, E, V, w) -> None:
             d[l] -= p
             e[l] = g
             e[m] = 0.0
-    for i in range(k):  # ascending (selection sort, the vectors along)
-        j = i
-        for c in range(i + 1, k):
-            if w[c] < w[j]:
-                j = c
-        if j != i:
-            w[i], w[j] = w[j], w[i]
-            for r in range(k):
-                V[r, i], V[r, j] = V[r, j], V[r, i]
 
 
-@numba.njit(cache=True)
+@internal
 def _length(c, w, tau, k) -> float:
     """``‖(S + τI)⁻¹ g‖`` in the eigenbasis (``c = Vᵀg``, ``w`` the eigenvalues)."""
     s = 0.0
@@ -428,7 +435,7 @@ def _length(c, w, tau, k) -> float:
     return np.sqrt(s)
 
 
-@numba.njit(cache=True)
+@internal
 def trust_region_step(w, V, g, k, radius, c, p) -> float:
     """The minimizer ``p[:k]`` of the model ``gᵀp + ½ pᵀSp`` within ``‖p‖ ≤ radius`` (Moré and Sorensen's
     characterization, solved in the eigenbasis of ``S = V diag(w) Vᵀ``, ``w`` ascending): ``p = −(S + τI)⁻¹ g``

@@ -3,7 +3,7 @@
 :func:`solve_local` is the one local solver of the framework. It reaches the task (level-1 terms) by
 Levenberg-Marquardt with random restarts (:mod:`~framework.engine.reach`), then, when the problem has
 regularizers (level-2 terms, e.g. motion), minimizes them without leaving the task
-(:func:`~framework.engine.newton.regularize`). Everything runs in compiled code, the random restarts included
+(:func:`~framework.engine.regularize.regularize`). Everything runs in compiled code, the random restarts included
 (drawn from a seeded stream, :mod:`~framework.engine.draws`); this module converts the time budget into a
 deadline and names the outcome. :func:`residuals` gives the stacked residuals and Jacobians at one
 configuration (for predictors, task covariances and tests).
@@ -17,18 +17,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..costs.blocks import LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS
+from ..costs.blocks import LEVEL_REGULARIZER, LEVEL_TASK
 from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
 from ..native import compiled_entry
 from ..validate import float_copy
-from . import newton
+from . import regularize as newton_phase
+from .derivatives import derivatives_at
 from .draws import draws, stream
 from .reach import DEADLINE, ITERATIONS, REACHED, STARTS, reach
+from .settings import Box, NewtonSettings, ReachSettings, Report
+from .weighted import exact_penalty, released_penalties, weighted_newton
 
-_REGULARIZE_STATUS = {newton.CONVERGED: "converged", newton.STALLED: "stalled", newton.DEADLINE: "time_budget",
-                      newton.ITERATIONS: "max_iterations", newton.NOT_APPLICABLE: "not_applicable"}
+_REGULARIZE_STATUS = {newton_phase.CONVERGED: "converged", newton_phase.STALLED: "stalled", newton_phase.DEADLINE: "time_budget",
+                      newton_phase.ITERATIONS: "max_iterations", newton_phase.NOT_APPLICABLE: "not_applicable"}
 
 
 @dataclass(frozen=True)
@@ -91,6 +94,15 @@ class LocalSettings:
         """Random restarts a descent may take: as many as its iteration and time budgets allow, or none."""
         return _RESTARTS if self.restarts else 0
 
+    def reach_settings(self, deadline_ns: int) -> ReachSettings:
+        """The settings :func:`~.reach.reach` takes, with a ``monotonic_ns()`` deadline (0: none)."""
+        return ReachSettings(self.tolerance, self.angular, self.max_iterations, self.stall, self.polish,
+                             self.max_restarts, deadline_ns)
+
+    def newton_settings(self, deadline_ns: int) -> NewtonSettings:
+        """The settings of the Newton phases, with a ``monotonic_ns()`` deadline (0: none)."""
+        return NewtonSettings(self.smoothing, self.regularize_iterations, deadline_ns)
+
 
 class LocalResult(NamedTuple):
     """Outcome of :func:`solve_local`.
@@ -119,9 +131,16 @@ class LocalResult(NamedTuple):
     values: np.ndarray | None = None
 
 
-def search_box(program: Program) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(lower, upper, box_wrap)``: the robot's box and which coordinates wrap around instead of stopping."""
-    return program.robot.lower, program.robot.upper, program.layout.box_wrap
+def search_box(program: Program) -> Box:
+    """The robot's box and which coordinates wrap around instead of stopping (:class:`~.settings.Box`)."""
+    return Box(program.robot.lower, program.robot.upper, program.layout.box_wrap)
+
+
+def project_into_box(x: np.ndarray, box: Box) -> None:
+    """``x`` into the box in place (numpy; :func:`~.steps.project` in compiled code): clipped, or wrapped into
+    ``[lower, lower + 2π)`` on full-turn axes."""
+    wrapped = box.lower + np.mod(x - box.lower, 2.0 * np.pi)
+    np.copyto(x, np.where(box.wraps, wrapped, np.clip(x, box.lower, box.upper)))
 
 
 def _nanoseconds(deadline: float | None) -> int:
@@ -150,8 +169,8 @@ def solve_local(
     """
     program.refresh()
     layout = program.layout
-    lower, upper, box_wrap = program.robot.lower, program.robot.upper, layout.box_wrap
-    n = lower.shape[0]
+    box = Box(program.robot.lower, program.robot.upper, layout.box_wrap)
+    n = box.lower.shape[0]
     if type(rng) is not np.ndarray:
         rng = stream(rng)
     elif rng.dtype != _STREAM or rng.shape != (1,) or not rng.flags.writeable:
@@ -160,7 +179,7 @@ def solve_local(
     drawn = x0 is None
     task_rows = program.task_rows
     if drawn and not task_rows:  # no descent to draw it
-        x = draws(rng, lower, upper, 1)[0]
+        x = draws(rng, box.lower, box.upper, 1)[0]
     else:
         x = np.empty(n) if drawn else float_copy(x0)
         if x.shape != (n,):
@@ -168,37 +187,27 @@ def solve_local(
     if deadline is None and settings.time_budget is not None:
         deadline = time.monotonic() + settings.time_budget
     deadline_ns = 0 if deadline is None else int(deadline * 1e9)  # (_nanoseconds, written out)
-    stats = np.zeros(3, dtype=np.int64)
-    errors = np.empty(layout.task_tolerances.size)
-    values = np.zeros(len(program.terms))
+    report = Report(np.empty(layout.task_tolerances.size), np.zeros(len(program.terms)), np.zeros(3, dtype=np.int64))
     code = REACHED
     if task_rows:
-        args = (x, drawn, settings.max_restarts, rng, lower, upper, box_wrap, program.kin, program.prog,
-                settings.tolerance, settings.angular, settings.max_iterations, settings.stall, deadline_ns,
-                settings.polish, errors, values, stats)
+        args = (x, drawn, rng, box, program.packed, settings.reach_settings(deadline_ns), report)
         code = _entry(program, reach, args)(*args)
-    iterations, evaluations, restarts = stats.tolist()
+    iterations, evaluations, restarts = report.stats.tolist()
     reached = code == REACHED
     regularized = multipliers = None
     if reached and settings.regularize and program.has_regularizers:
         multipliers = np.zeros(task_rows)
-        args = _regularize_args(program, x, settings, deadline_ns, multipliers, errors, values, stats)
-        code = _entry(program, newton.regularize, args)(*args)
+        args = (x, box, program.packed, settings.newton_settings(deadline_ns), multipliers, report)
+        code = _entry(program, newton_phase.regularize, args)(*args)
         regularized = regularized_status(code)
-        evaluations += int(stats[1])
+        evaluations += int(report.stats[1])
     status = "reached" if reached else _STATUS[int(code)] if task_rows else "no_task"
+    values = report.values
     if not task_rows and not regularized:  # nothing ran: the values at the start
         values = program.values(x[None])[0]
     # (tuple.__new__: a named tuple's own __new__ is a Python call more per solve)
-    return tuple.__new__(LocalResult, (x, reached, status, errors, iterations, evaluations, restarts, regularized,
-                                       multipliers, values if not layout.generic else None))
-
-
-def _regularize_args(program: Program, x: np.ndarray, settings: LocalSettings, deadline_ns: int,
-                     multipliers: np.ndarray, errors: np.ndarray, values: np.ndarray, stats: np.ndarray) -> tuple:
-    """:func:`~.newton.regularize`'s arguments, as :func:`solve_local` passes them."""
-    return (x, program.robot.lower, program.robot.upper, program.layout.box_wrap, program.kin, program.prog,
-            settings.smoothing, settings.regularize_iterations, deadline_ns, multipliers, errors, values, stats)
+    return tuple.__new__(LocalResult, (x, reached, status, report.errors, iterations, evaluations, restarts,
+                                       regularized, multipliers, values if not layout.generic else None))
 
 
 #: :func:`prepare`'s run of the engine: no iteration, no Newton phase (it loads code, it solves nothing).
@@ -216,10 +225,10 @@ def prepare(program: Program) -> None:
     if program.task_rows:  # the reach loop, run without an iteration
         solve_local(program, program.robot.middle, stream(0), _LOADING)
     if program.has_regularizers:  # the Newton phase, resolved (not run: it needs a start on the task)
-        x = np.array(program.robot.middle)
-        _entry(program, newton.regularize, _regularize_args(
-            program, x, _LOADING, 0, np.zeros(program.task_rows), np.empty(program.layout.task_tolerances.size),
-            np.zeros(len(program.terms)), np.zeros(3, dtype=np.int64)))
+        report = Report(np.empty(program.layout.task_tolerances.size), np.zeros(len(program.terms)),
+                        np.zeros(3, dtype=np.int64))
+        _entry(program, newton_phase.regularize, (np.array(program.robot.middle), search_box(program), program.packed,
+                                            _LOADING.newton_settings(0), np.zeros(program.task_rows), report))
     entries[prepare] = None
 
 
@@ -243,7 +252,7 @@ def _entry(program: Program, kernel, args: tuple):
 
 
 def regularized_status(code: int) -> str | None:
-    """The name of :func:`~.newton.regularize`'s status ``code`` (``LocalResult.regularized``; ``None`` for
+    """The name of :func:`~.regularize.regularize`'s status ``code`` (``LocalResult.regularized``; ``None`` for
     ``-1``: the phase did not run)."""
     return None if code < 0 else _REGULARIZE_STATUS[int(code)]
 
@@ -256,25 +265,24 @@ def residuals(program: Program, x: np.ndarray, level: int = LEVEL_TASK, *,
     program.refresh()
     x = np.ascontiguousarray(x, dtype=float)
     r, J = residual_arrays(program) if out is None else out
-    m = residuals_at(x, level, program.kin, program.prog, r, J)
+    m = residuals_at(x, np.int64(level), program.packed, r, J)
     return r[:m], J[:m]
 
 
 def residual_arrays(program: Program) -> tuple[np.ndarray, np.ndarray]:
     """Arrays ``(rows,)`` and ``(rows, n)`` holding every block's residual rows (:func:`residuals`' ``out``)."""
-    rows = int(program.prog[0][:, ROWS].sum())
+    rows = int(program.packed.blocks["rows"].sum())
     return np.empty(rows), np.empty((rows, program.robot.n))
 
 
 def reaching_is_optimal(program: Program, x: np.ndarray, multipliers: np.ndarray | None) -> bool:
     """Whether ``x`` — on the task, regularizers minimized there — also minimizes the weighted sum locally
-    (every task block an exact penalty for the task's multipliers; see :func:`~framework.engine.newton.
+    (every task block an exact penalty for the task's multipliers; see :func:`~framework.engine.weighted.
     exact_penalty`). ``True`` without multipliers (nothing was regularized)."""
     if multipliers is None:
         return True
-    lower, upper, box_wrap = search_box(program)
-    return bool(newton.exact_penalty(np.ascontiguousarray(x, dtype=float), lower, upper, box_wrap, program.prog,
-                                     np.ascontiguousarray(multipliers, dtype=float)))
+    return bool(exact_penalty(np.ascontiguousarray(x, dtype=float), search_box(program), program.packed.blocks,
+                              np.ascontiguousarray(multipliers, dtype=float)))
 
 
 def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray | None,
@@ -285,57 +293,53 @@ def minimize_weighted(program: Program, x0: np.ndarray, multipliers: np.ndarray 
     Task blocks are *held* (kept exactly on their targets) or *released* into the objective. From a point on the
     task with its ``multipliers`` every block starts held; without multipliers (any other start) the blocks
     within ``near`` of their targets are held and the others released. Each round releases the held blocks that
-    are no exact penalty for their multipliers (leaving them lowers the sum: :func:`~framework.engine.newton.
-    exact_penalty`) and minimizes again on the blocks still held (:func:`~framework.engine.newton.regularize`
+    are no exact penalty for their multipliers (leaving them lowers the sum: :func:`~framework.engine.weighted.
+    exact_penalty`) and minimizes again on the blocks still held (:func:`~framework.engine.regularize.regularize`
     with those levels), until every held block is an exact penalty. Blocks that pay for themselves stay exactly
     on their targets (no kink to smooth over).
 
     Returns ``(x, evaluations)``.
     """
     program.refresh()
-    lower, upper, box_wrap = search_box(program)
-    bint = program.prog[0].copy()
-    prog = (bint, *program.prog[1:])  # the held task blocks at level 1, the released ones at level 2
+    box = search_box(program)
+    table = program.packed.blocks.copy()  # the held task blocks at level 1, the released ones at level 2
+    packed = program.packed._replace(blocks=table)
     x = np.array(x0, dtype=float)
-    stats = np.zeros(3, dtype=np.int64)
-    deadline_ns = _nanoseconds(deadline)
+    report = Report(np.zeros(0), np.zeros(len(program.terms)), np.zeros(3, dtype=np.int64))
+    newton_settings = settings.newton_settings(_nanoseconds(deadline))
     evaluations = 0
-    task = np.flatnonzero(bint[:, LEVEL] == LEVEL_TASK)
+    task = np.flatnonzero(table["level"] == LEVEL_TASK)
     held = np.ones(task.size, dtype=bool) if multipliers is not None else program.task_errors(x) <= near
     lam = None if multipliers is None else np.ascontiguousarray(multipliers, dtype=float)
     for _ in range(2 * task.size + 2):
         if lam is not None:  # release the held blocks that are no exact penalty for their multipliers
             pays = np.empty(int(held.sum()), dtype=bool)
-            newton.exact_penalties(prog, lam, pays)
+            released_penalties(table, lam, pays)
             new = held.copy()
             new[np.flatnonzero(held)[~pays]] = False
             new |= program.task_errors(x) <= near  # released blocks sitting on their target: hold them exactly
             if np.array_equal(new, held):
                 break
             held = new
-        bint[task] = program.prog[0][task]
-        bint[task[~held], LEVEL] = LEVEL_REGULARIZER
-        lam = np.zeros(int(bint[task[held], ROWS].sum()))
-        errors = np.zeros(int(held.sum()))
-        newton.regularize(x, lower, upper, box_wrap, program.kin, prog, settings.smoothing,
-                          settings.regularize_iterations, deadline_ns, lam, errors, np.zeros(len(program.terms)),
-                          stats)
-        evaluations += int(stats[1])
+        table[task] = program.packed.blocks[task]
+        table["level"][task[~held]] = LEVEL_REGULARIZER
+        lam = np.zeros(int(table["rows"][task[held]].sum()))
+        report = report._replace(errors=np.zeros(int(held.sum())))
+        newton_phase.regularize(x, box, packed, newton_settings, lam, report)
+        evaluations += int(report.stats[1])
     return x, evaluations
 
 
 def minimize_sum(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
                  deadline: float | None = None) -> tuple[np.ndarray, str, int]:
     """Damped Newton on the weighted sum of every task and regularizer term from any ``x0``, in the box (norms
-    smoothed at zero); see :func:`~framework.engine.newton.weighted_newton`. Returns ``(x, status, evaluations)``.
+    smoothed at zero); see :func:`~framework.engine.weighted.weighted_newton`. Returns ``(x, status, evaluations)``.
     """
     program.refresh()
-    lower, upper, box_wrap = search_box(program)
     x = np.array(x0, dtype=float)
     stats = np.zeros(3, dtype=np.int64)
-    deadline_ns = _nanoseconds(deadline)
-    code = newton.weighted_newton(x, lower, upper, box_wrap, program.kin, program.prog, settings.smoothing,
-                                  settings.regularize_iterations, deadline_ns, stats)
+    code = weighted_newton(x, search_box(program), program.packed, settings.newton_settings(_nanoseconds(deadline)),
+                           stats)
     return x, _REGULARIZE_STATUS[int(code)], int(stats[1])
 
 
@@ -345,4 +349,4 @@ def objective_derivatives_at(program: Program, x: np.ndarray, level: int = -1, *
     task and regularizers), as the Newton phases see them (the second-order kinematics with ``curvature``)."""
     program.refresh()
     x = np.ascontiguousarray(x, dtype=float)
-    return newton.derivatives_at(x, level, program.kin, program.prog, smoothing, curvature)
+    return derivatives_at(x, np.int64(level), program.packed, float(smoothing), bool(curvature))

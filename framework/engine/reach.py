@@ -1,11 +1,11 @@
 """Reaching the task: bounded Levenberg-Marquardt on the stacked task residuals, with random restarts.
 
-One compiled loop, TRAC-IK's strategy written as one function. Each iteration takes the damped Gauss-Newton
-step ``dx = −(JᵀJ + λI)⁻¹Jᵀr`` with ``λ = μ‖r‖`` (damping that fades as the residual does, so the last steps
-are Gauss-Newton's quadratic ones; Fan & Yuan's choice, *Computing* 74, 2005). ``μ`` follows the step's gain
-ratio ``ρ`` (the drop of ``‖r‖²`` over the drop its linearization predicted; Nielsen's rule, Madsen, Nielsen &
-Tingleff, *Methods for non-linear least squares problems*, 2004): ×``max(1/3, 1 − (2ρ − 1)³)`` after a step that
-lowers ``‖r‖`` — down by up to 3 where the model holds, up where it does not — and ×4 after one that does not.
+TRAC-IK's strategy, compiled. Each iteration takes the damped Gauss-Newton step ``dx = −(JᵀJ + λI)⁻¹Jᵀr`` with
+``λ = μ‖r‖`` (damping that fades as the residual does, so the last steps are Gauss-Newton's quadratic ones; Fan &
+Yuan's choice, *Computing* 74, 2005). ``μ`` follows the step's gain ratio ``ρ`` (the drop of ``‖r‖²`` over the drop
+its linearization predicted; Nielsen's rule, Madsen, Nielsen & Tingleff, *Methods for non-linear least squares
+problems*, 2004): ×``max(1/3, 1 − (2ρ − 1)³)`` after a step that lowers ``‖r‖`` — down by up to 3 where the model
+holds, up where it does not — and ×4 after one that does not.
 This is for problems whose task is all there is. Where regularizers choose among the task's solutions (motion
 terms) or contact rows bend the descent, the point where the descent lands decides which local minimum the
 regularizers reach, and the engine keeps the rule these replaced: ``λ = μ‖r‖²`` and a fixed ÷4 after an
@@ -26,15 +26,7 @@ FK-sampled poses per arm (UR5, Panda, Baxter), the damping rule on 1,500 per arm
 
 After the tolerance is met, up to ``polish`` Gauss-Newton steps take the residual to rounding level: projected on
 the box (coordinates a step carries through their bounds are moved onto them, the rest solved again:
-:func:`projected_step`), and taken again damped at a floor where ``JᵀJ`` is singular (:data:`POLISH_FLOOR`).
-
-The iteration's helpers are inlined into the loop (``inline="always"``: the bounded step, the gain ratio, the box
-projection, the task errors, and the trial point's linearization with its frame Jacobians): a call numba does not
-inline passes every array as its struct of fields, ~30-70 ns per call with the workspaces' dozen arrays, and the
-loop made ~10 calls per iteration. Fresh-Problem UR5 pose solves took 0.93x the time (mean 0.90x), the answers
-identical. Each inlined copy is compiled again, and a linearization inlines every block kind's kernel: inlining
-also the polish's linearization and the step's normal equations (``gram``, ``levenberg_marquardt_step``) measured
-0.88-0.91x but took the first UR5 solve's compile from 77 s to 226 s; as kept, 135 s (compiled once per install).
+:func:`~.steps.projected_step`), and taken again damped at a floor where ``JᵀJ`` is singular (:data:`POLISH_FLOOR`).
 
 Contact rows are taken lazily: each start first descends without the collision blocks (``SPHERES``, ``SOLIDS``,
 the costly rows, zero wherever the robot is clear); when the other blocks are within tolerance the collision
@@ -47,27 +39,30 @@ start (:func:`draw_start`; each draw stops at its first violated one-sided block
 
 from __future__ import annotations
 
-import numba
+from typing import NamedTuple
+
 import numpy as np
 
-from ..costs.blocks import KIND, LEVEL, LEVEL_REGULARIZER, LEVEL_TASK, ROWS, is_contact, is_hinge
-from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, linearize_inline,
-                             task_errors, term_values, within_tolerance, workspace_pair)
-from ..native import borrow, borrow_kin, borrow_prog, keep_alive, square
+from ..costs.blocks import LEVEL_REGULARIZER
+from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors,
+                             term_values, within_tolerance)
+from ..costs.workspace import views, workspaces
+from ..native import compiled, internal, keep_alive, matrix, take
 from .clock import monotonic_ns
 from .draws import uniform_in_box
-from .linalg import least_norm_step, levenberg_marquardt_step, moving_columns, moving_columns_step
+from .steps import bounded_step, copy, gain_factor, project, projected_step, squared_entries, squared_norm
+from .tables import has_hinges, rows_of, without_contacts
 
 #: Status codes of :func:`reach`.
 REACHED, ITERATIONS, DEADLINE, STARTS = 0, 1, 2, 3
 #: ``μ`` at each (re)start, its floor, the ceiling where a start counts as stalled, its factor after a rejected
-#: step and the smallest factor after an accepted one (Nielsen's rule, see the module). Against the rule they
-#: replaced (``λ = μ‖r‖²``, ÷4), on 1,500 FK-sampled poses per arm from the middle (not those of
-#: benchmarks/pose_ik.py), iterations at the median / mean / p95: UR5 14 / 23.3 / 76 -> 11 / 18.6 / 58, Panda
-#: 9 / 20.1 / 79 -> 8 / 17.2 / 63, Baxter 9 / 19.4 / 70 -> 8 / 16.6 / 58, Puma 560 11 / 25.2 / 103 -> 9 / 22.9 / 91
-#: (the gain rule alone: 12, 8, 8, 10 at the median). Each no better on the same poses: ×ν on rejection (ν = 2,
-#: doubling), μ₀ = 0.01, 0.03, 0.3 or 1, a floor of ⅕.
-DAMPING_START, DAMPING_MIN, DAMPING_MAX, DAMPING_UP, DAMPING_DOWN = 0.1, 1e-12, 1e8, 4.0, 1.0 / 3.0
+#: step (and, :data:`~.steps.DAMPING_DOWN`, the smallest factor after an accepted one: Nielsen's rule, see the
+#: module). Against the rule they replaced (``λ = μ‖r‖²``, ÷4), on 1,500 FK-sampled poses per arm from the middle
+#: (not those of benchmarks/pose_ik.py), iterations at the median / mean / p95: UR5 14 / 23.3 / 76 -> 11 / 18.6 /
+#: 58, Panda 9 / 20.1 / 79 -> 8 / 17.2 / 63, Baxter 9 / 19.4 / 70 -> 8 / 16.6 / 58, Puma 560 11 / 25.2 / 103 -> 9 /
+#: 22.9 / 91 (the gain rule alone: 12, 8, 8, 10 at the median). Each no better on the same poses: ×ν on rejection
+#: (ν = 2, doubling), μ₀ = 0.01, 0.03, 0.3 or 1, a floor of ⅕.
+DAMPING_START, DAMPING_MIN, DAMPING_MAX, DAMPING_UP = 0.1, 1e-12, 1e8, 4.0
 #: ``μ``'s factor after an accepted step on problems with regularizers or contact rows (where ``λ = μ‖r‖²``; see
 #: the module).
 LANDING_DAMPING_DOWN = 0.25
@@ -92,342 +87,239 @@ CLEAR_DRAWS = 16
 CONTACT_STALL = 10
 
 
-@numba.njit(cache=True, inline="always")
-def project(x, lower, upper, box_wrap):
-    """``x`` into the box in place: clipped, or wrapped into ``[lower, lower + 2π)`` on full-turn axes."""
-    for i in range(x.shape[0]):
-        if box_wrap[i]:
-            x[i] = lower[i] + np.mod(x[i] - lower[i], 2.0 * np.pi)
-        elif x[i] < lower[i]:
-            x[i] = lower[i]
-        elif x[i] > upper[i]:
-            x[i] = upper[i]
+class Scratch(NamedTuple):
+    """The reach loop's scratch: the steps' matrices and vectors (flat), the trial point, the best configurations
+    seen with every block ``[0]`` and without the contact rows ``[1]`` and their ``‖r‖²``, the bounded step's
+    Jacobian (flat), the polish's projected steps' scratch."""
+
+    A: np.ndarray
+    L: np.ndarray
+    y: np.ndarray
+    dx: np.ndarray
+    xt: np.ndarray
+    best: np.ndarray
+    best_e: np.ndarray
+    Jc: np.ndarray
+    pins: np.ndarray
 
 
-@numba.njit(cache=True, inline="always")
-def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
-    """The Levenberg-Marquardt step ``dx = −(JᵀJ + λI)⁻¹Jᵀr = −Jᵀ(JJᵀ + λI)⁻¹r``, in the smaller of the two
-    systems (``A, L`` flat buffers of at least ``k²`` with ``k = min(m, n)``, ``y`` at least ``max(m, n)``; their
-    leading parts are used, as contiguous ``(k, k)`` matrices: with ``[:k, :k]`` slices, strided, the step cost
-    a third more). Where fewer columns than rows move the rows (``m < n`` coordinates, but at most ``m`` of them
-    nonzero columns: a full pose of a short limb on a whole robot, coordinates held at their bounds), ``J Jᵀ`` is
-    singular: the step is solved over the moving columns instead (:func:`~.linalg.moving_columns_step`; the same
-    step, without losing the last, lightly damped ones to rounding)."""
-    m, n = Jr.shape
-    k = min(m, n)
-    Ak, Lk = square(A, k), square(L, k)
-    if m < n:
-        nz = moving_columns(Jr, m)
-        if nz <= m:
-            return moving_columns_step(Jr, r, damping, square(A, nz), square(L, nz), y[:nz], dx, nz)
-        return least_norm_step(Jr, r, damping, Ak, Lk, y[:k], dx)
-    return levenberg_marquardt_step(Jr, r, damping, Ak, Lk, y[:k], dx)
+@internal
+def scratch(at, n, full):
+    """:class:`Scratch` for ``n`` coordinates and ``full`` task rows laid out from address ``at``, and the address
+    after it (:func:`~framework.native.take`)."""
+    k = min(full, n)
+    A, at = take(at, k * k)
+    L, at = take(at, k * k)
+    y, at = take(at, max(k, n))
+    dx, at = take(at, n)
+    xt, at = take(at, n)
+    best, at = take(at, (2, n))
+    best_e, at = take(at, 2)
+    Jc, at = take(at, full * n)
+    pins, at = take(at, full + n)
+    return Scratch(A, L, y, dx, xt, best, best_e, Jc, pins), at
 
 
-@numba.njit(cache=True, inline="always")
-def held(x, lower, upper, wraps, d) -> bool:
-    """Whether a coordinate at ``x`` in ``[lower, upper]`` (``wraps``: no bounds) sits on a bound that a move in
-    direction ``d`` (its sign) pushes through."""
-    return not wraps and ((x <= lower and d < 0.0) or (x >= upper and d > 0.0))
-
-
-@numba.njit(cache=True, inline="always")
-def bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx) -> bool:
-    """:func:`damped_step`, then again without the coordinates it would push through a bound they sit on."""
-    if not damped_step(Jr, r, damping, A, L, y, dx):
-        return False
-    m, n = Jr.shape
-    blocked = False
-    for i in range(n):
-        if held(x[i], lower[i], upper[i], box_wrap[i], dx[i]):
-            blocked = True
-            break
-    if not blocked:
-        return True
-    for i in range(n):
-        keep = not held(x[i], lower[i], upper[i], box_wrap[i], dx[i])
-        for a in range(m):
-            Jc[a, i] = Jr[a, i] if keep else 0.0
-    return damped_step(Jc, r, damping, A, L, y, dx)
-
-
-@numba.njit(cache=True)
-def projected_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, pins, A, L, y, dx) -> bool:
-    """:func:`bounded_step`, then, while the step carries coordinates through their bounds, those moved onto the
-    bounds and the step solved again for the others (with the pinned moves' effect ``J_i (b_i − x_i)`` added to
-    the residual): a Gauss-Newton step projected on the box, where a clipped one is a partial step (a polish near
-    a whole body's limits converged linearly, 3 steps leaving ``1e-7``). ``pins`` scratch of ``m + n``."""
-    if not bounded_step(x, Jr, r, damping, lower, upper, box_wrap, Jc, A, L, y, dx):
-        return False
-    m, n = Jr.shape
-    rp, side = pins[:m], pins[m : m + n]  # the residual with the pinned moves; -1 / +1: pinned at lower / upper
-    side[:] = 0.0
-    for _ in range(n):
-        new = False
-        for i in range(n):
-            if side[i] == 0.0 and not box_wrap[i]:
-                t = x[i] + dx[i]
-                if t < lower[i] or t > upper[i]:
-                    side[i] = -1.0 if t < lower[i] else 1.0
-                    new = True
-        if not new:
-            return True
-        for a in range(m):
-            s = r[a]
-            for i in range(n):
-                if side[i] != 0.0:
-                    s += Jr[a, i] * ((lower[i] if side[i] < 0.0 else upper[i]) - x[i])
-                    Jc[a, i] = 0.0
-                else:
-                    Jc[a, i] = Jr[a, i]
-            rp[a] = s
-        if not damped_step(Jc, rp, damping, A, L, y, dx):
-            return False
-        for i in range(n):
-            if side[i] != 0.0:
-                dx[i] = (lower[i] if side[i] < 0.0 else upper[i]) - x[i]
-    return True
-
-
-@numba.njit(cache=True)
-def has_hinges(prog) -> bool:
-    """Whether ``prog`` has a one-sided task block (a distance band, a cone, a collision row)."""
-    bint = prog[0]
-    for b in range(bint.shape[0]):
-        if bint[b, LEVEL] == LEVEL_TASK and is_hinge(bint[b, KIND]):
-            return True
-    return False
-
-
-@numba.njit(cache=True)
-def draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x) -> int:
-    """A new start ``x (n,)`` drawn uniformly in the box from the stream ``rng``, drawn again (up to
-    :data:`CLEAR_DRAWS` times) while a one-sided block is violated there; returns the draws evaluated (0 without
-    one-sided blocks: nothing to be clear of). ``ws``: a :func:`~framework.costs.kernels.workspace` (scratch)."""
-    hinged = has_hinges(prog)
-    for k in range(CLEAR_DRAWS if hinged else 1):
-        uniform_in_box(rng, lower, upper, x)
-        project(x, lower, upper, box_wrap)
-        if not hinged or hinges_clear(x, kin, prog, ws):
-            return k + 1 if hinged else 0
-    return CLEAR_DRAWS
-
-
-@numba.njit(cache=True)
-def without_contacts(bint):
-    """The block table ``bint`` with the collision blocks (``SPHERES``, ``SOLIDS``) of the task taken out of it
-    (level 0: no level selects them; a copy, or ``bint`` itself when it has none), and whether there were any."""
-    for b in range(bint.shape[0]):
-        if bint[b, LEVEL] == LEVEL_TASK and is_contact(bint[b, KIND]):
-            lazy = bint.copy()
-            for c in range(b, bint.shape[0]):
-                if bint[c, LEVEL] == LEVEL_TASK and is_contact(bint[c, KIND]):
-                    lazy[c, LEVEL] = 0
-            return lazy, True
-    return bint, False
-
-
-@numba.njit(cache=True)
-def rows_of(prog, level) -> int:
-    """Residual rows of the blocks of ``level`` (``-1``: levels 1 and 2) in ``prog``."""
-    bint = prog[0]
-    rows = 0
-    for b in range(bint.shape[0]):
-        lv = bint[b, LEVEL]
-        if (level >= 0 and lv == level) or (level < 0 and lv != 0):
-            rows += bint[b, ROWS]
-    return rows
-
-
-@numba.njit(cache=True, inline="always")
-def gain_factor(e, et, Jr, r, x, xt, dx, box_wrap) -> float:
-    """Nielsen's factor of ``μ`` after an accepted step from ``x`` to ``xt`` that took ``‖r‖²`` from ``e`` to
-    ``et``: ``max(DAMPING_DOWN, 1 − (2ρ − 1)³)`` with ``ρ = (e − et) / (e − ‖r + J d‖²)``, ``d`` the step taken
-    (``xt − x``: clipped at the bounds; ``dx`` on coordinates that wrap around)."""
-    m, n = Jr.shape
-    model = 0.0
-    for a in range(m):
-        s = r[a]
-        for i in range(n):
-            s += Jr[a, i] * (dx[i] if box_wrap[i] else xt[i] - x[i])
-        model += s * s
-    predicted = e - model
-    if not predicted > 0.0:
-        return DAMPING_DOWN
-    t = 2.0 * (e - et) / predicted - 1.0
-    return max(DAMPING_DOWN, 1.0 - t * t * t)
-
-
-@numba.njit(cache=True, inline="always")
-def squared_norm(r, m) -> float:
-    s = 0.0
-    for i in range(m):
-        s += r[i] * r[i]
-    return s
-
-
-@numba.njit(cache=True)
-def squared_entries(J, m) -> float:
-    """``‖J[:m]‖²``: the sum of the squared entries of the first ``m`` rows of ``J``."""
-    s = 0.0
-    for a in range(m):
-        for i in range(J.shape[1]):
-            s += J[a, i] * J[a, i]
-    return s
-
-
-@numba.njit(cache=True)
-def reach(x, drawn, restarts, rng, lower, upper, box_wrap, kin, prog, tol_linear, tol_angular, max_iterations,
-          stall, deadline_ns, polish, errors, values, stats) -> int:
+@compiled
+def reach(x, drawn, rng, box, packed, settings, report) -> int:
     """Drive every task block within tolerance from ``x (n,)``, then from random configurations in the box.
 
     Args:
         x: first start (with ``drawn``: drawn here, as a restart draws its start); on return the configuration
             reached, or the best one seen (smallest ``‖r‖`` over every block; over the blocks but the contact rows
             if no descent got to evaluate those).
-        restarts: how many times a stalled descent may restart from a configuration drawn from ``rng`` (the
-            stream ``uint64 (1,)`` of :mod:`~framework.engine.draws`, advanced).
-        tol_linear, tol_angular: tolerances of position-like [m] and orientation [rad] blocks.
-        max_iterations: Levenberg-Marquardt iterations in all; ``stall``: iterations without progress before
-            a restart; ``deadline_ns``: ``monotonic_ns()`` at which to stop (0: none).
-        polish: extra Gauss-Newton steps after success, kept while they lower ``‖r‖`` (to machine precision).
-        errors: out: each task block's error at the returned ``x`` [m or rad].
-        values: out: each term's value at the returned ``x``.
-        stats: ``int64 (3,)`` out: iterations, residual evaluations, restarts.
+        rng: the stream ``uint64 (1,)`` restarts draw from (:mod:`~framework.engine.draws`), advanced.
+        box: the search box (:class:`~.settings.Box`); packed: the problem (:class:`~framework.costs.blocks.Packed`).
+        settings: tolerances, budgets and restarts (:class:`~.settings.ReachSettings`).
+        report: out: each task block's error at the returned ``x`` [m or rad], each term's value there, and the
+            iterations, residual evaluations and restarts (:class:`~.settings.Report`).
 
     Returns:
         ``REACHED``, ``ITERATIONS``, ``DEADLINE`` or ``STARTS`` (stalled with the restarts used up).
     """
     n = x.shape[0]
-    kin, prog = borrow_kin(kin), borrow_prog(prog)
-    x, lower, upper, box_wrap = borrow(x), borrow(lower), borrow(upper), borrow(box_wrap)
-    own_ws, ws, trial = workspace_pair(kin, prog, n)
-    lazy_bint, has_contacts = without_contacts(prog[0])
-    lazy_prog = (lazy_bint, prog[1], prog[2], prog[3], prog[4], prog[5], prog[6])
+    owners, records = workspaces(packed, n, 2)
+    ws, trial = records[0], records[1]
+    full_table = packed.blocks
+    lazy_table, has_contacts = without_contacts(full_table)
+    full = rows_of(full_table, TASK)
+    _, end = scratch(0, n, full)
+    own = np.empty(end // 8)
+    s, _ = scratch(own.ctypes.data, n, full)
+    landing = has_contacts or rows_of(full_table, LEVEL_REGULARIZER) > 0  # where the descent lands matters
+    drew = max(draw_start(rng, box, ws, x), 1) if drawn else 0
+    project(x, box)
     lazy = has_contacts  # the descent sees the blocks without the contact rows first
-    landing = has_contacts or rows_of(prog, LEVEL_REGULARIZER) > 0  # where the descent lands matters (see module)
-    cur = lazy_prog if lazy else prog
-    drew = max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1) if drawn else 0
-    project(x, lower, upper, box_wrap)
-    m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
-    Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]  # the rows at x and at a trial (views kept)
-    full = rows_of(prog, TASK)
-    k = min(full, n)
-    own = np.empty(2 * k * k + max(k, n) + 4 * n + full * n + 2 + full + n)  # one allocation, carved into the scratch
-    scratch = borrow(own)
-    A, L = scratch[: k * k], scratch[k * k : 2 * k * k]  # flat: damped_step shapes them
-    a = 2 * k * k
-    y = scratch[a : a + max(k, n)]
-    a += max(k, n)
-    dx, xt = scratch[a : a + n], scratch[a + n : a + 2 * n]
-    best = scratch[a + 2 * n : a + 4 * n].reshape((2, n))  # the best seen with every block [0], without contacts [1]
-    a += 4 * n
-    Jc_all = scratch[a : a + full * n]
-    Jc = Jc_all[: m * n].reshape((m, n))
-    e = squared_norm(ws[3], m)
-    best_e = scratch[a + full * n : a + full * n + 2]  # their ‖r‖², each in its own view
-    best_e[0] = best_e[1] = np.inf
-    pins = scratch[a + full * n + 2 : a + full * n + 2 + full + n]  # the polish's projected steps' scratch
-    best_e[int(lazy)], best[int(lazy)] = e, x
+    s.best_e[0] = s.best_e[1] = np.inf
+    m, e = _start(x, ws, trial, lazy_table if lazy else full_table, s, lazy)
     damping, checkpoint, since = DAMPING_START, e, 0
     iterations, evaluations, restarted = 0, 1 + drew, 0
-    status = ITERATIONS
+    errors, status = report.errors, ITERATIONS
     while True:
-        task_errors(cur, ws[3], errors)
-        if within_tolerance(cur, errors, tol_linear, tol_angular):
+        task_errors(ws, errors)
+        if within_tolerance(ws, errors, settings.tol_linear, settings.tol_angular):
             if not lazy:
                 status = REACHED
                 break
-            lazy, cur = False, prog  # the rest is met: the contact rows now; the descent goes on with them
-            m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
-            Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]
-            Jc = Jc_all[: m * n].reshape((m, n))
+            lazy = False  # the rest is met: the contact rows now; the descent goes on with them
+            m, e = _contacts_on(x, ws, trial, full_table, s)
             evaluations += 1
-            e = squared_norm(ws[3], m)
-            if e < best_e[0]:
-                best_e[0], best[0] = e, x
             damping, checkpoint, since = DAMPING_START, e, 0
             continue
-        if iterations >= max_iterations:
+        if iterations >= settings.max_iterations:
             break
-        if deadline_ns > 0 and monotonic_ns() >= deadline_ns:
+        if settings.deadline_ns > 0 and monotonic_ns() >= settings.deadline_ns:
             status = DEADLINE
             break
         iterations += 1
-        accepted = False
-        if bounded_step(x, Jw, rw, damping * (e if landing else np.sqrt(e)), lower, upper, box_wrap, Jc, A, L, y, dx):
-            for i in range(n):
-                xt[i] = x[i] + dx[i]
-            project(xt, lower, upper, box_wrap)
-            # poses only where most steps are rejected (landing); elsewhere most are accepted: the Jacobians too
-            linearize_inline(xt, TASK, kin, cur, trial, NO if landing else YES, COMPUTE)
-            evaluations += 1
-            et = squared_norm(trial[3], m)
-            if et < e:
-                accepted = True
-                factor = LANDING_DAMPING_DOWN if landing else gain_factor(e, et, Jw, rw, x, xt, dx, box_wrap)
-                damping = max(damping * factor, DAMPING_MIN)
-                if landing:
-                    linearize(xt, TASK, kin, cur, trial, YES, JACOBIANS_FROM_POSES)
-                ws, trial, Jw, rw, Jt, rt = trial, ws, Jt, rt, Jw, rw
-                x[:] = xt
-                e = et
-                if e < best_e[int(lazy)]:
-                    best_e[int(lazy)], best[int(lazy)] = e, x
-        if not accepted:
+        accepted, tried, e, damping = _step(x, box, ws, trial, s, m, e, damping, landing)
+        evaluations += tried
+        if accepted:
+            ws, trial = trial, ws
+            if e < s.best_e[int(lazy)]:
+                s.best_e[int(lazy)] = e
+                copy(s.best[int(lazy)], x)
+        else:
             damping *= DAMPING_UP
         if e < PROGRESS * checkpoint:
             checkpoint, since = e, 0
         else:
             since += 1
-        if since >= (stall if lazy or not has_contacts else min(stall, CONTACT_STALL)) or damping > DAMPING_MAX:
-            if restarted >= restarts:
+        patience = settings.stall if lazy or not has_contacts else min(settings.stall, CONTACT_STALL)
+        if since >= patience or damping > DAMPING_MAX:
+            if restarted >= settings.restarts:
                 status = STARTS
                 break
-            evaluations += max(draw_start(rng, lower, upper, box_wrap, kin, prog, ws, x), 1)
+            _with_table(ws, trial, full_table)
+            evaluations += max(draw_start(rng, box, ws, x), 1)
             restarted += 1
-            lazy, cur = has_contacts, lazy_prog if has_contacts else prog  # without the contact rows first, again
-            m = linearize(x, TASK, kin, cur, ws, YES, COMPUTE)
-            Jw, rw, Jt, rt = ws[4][:m], ws[3][:m], trial[4][:m], trial[3][:m]
-            Jc = Jc_all[: m * n].reshape((m, n))
-            e = squared_norm(ws[3], m)
-            if e < best_e[int(lazy)]:
-                best_e[int(lazy)], best[int(lazy)] = e, x
+            lazy = has_contacts  # without the contact rows first, again
+            m, e = _start(x, ws, trial, lazy_table if lazy else full_table, s, lazy)
             damping, checkpoint, since = DAMPING_START, e, 0
+    _with_table(ws, trial, full_table)
     if status == REACHED:
-        stale = False  # whether ws's Jacobians are behind its poses (taken only for a step that follows)
-        for _ in range(polish):  # quadratic convergence: one or two steps take it to machine precision
-            if e <= POLISHED:
-                break
-            if stale:
-                linearize(x, TASK, kin, prog, ws, YES, JACOBIANS_FROM_POSES)
-            lam, et = DAMPING_MIN * e, e
-            for attempt in range(2):  # the Gauss-Newton step; if it fails short of rounding level, damped at the floor
-                if attempt == 1:
-                    if e <= ROUNDED:
-                        break
-                    lam = max(lam, POLISH_FLOOR * squared_entries(ws[4], m) / n)
-                if not projected_step(x, ws[4][:m], ws[3][:m], lam, lower, upper, box_wrap, Jc, pins, A, L, y, dx):
-                    continue
-                for i in range(n):
-                    xt[i] = x[i] + dx[i]
-                project(xt, lower, upper, box_wrap)
-                linearize(xt, TASK, kin, prog, trial, NO, COMPUTE)
-                evaluations += 1
-                et = squared_norm(trial[3], m)
-                if et < e:
-                    break
-            if not et < e:
-                break
+        swapped, polished = _polish(x, box, ws, trial, s, m, e, settings.polish)
+        evaluations += polished
+        if swapped:
             ws, trial = trial, ws
-            x[:] = xt
-            e, stale = et, True
-        task_errors(prog, ws[3], errors)
     else:
-        x[:] = best[0] if best_e[0] < np.inf else best[1]
-        linearize(x, TASK, kin, prog, ws, NO, COMPUTE)
-        task_errors(prog, ws[3], errors)
-    term_values(x, prog, ws, values)
-    stats[0], stats[1], stats[2] = iterations, evaluations, restarted
-    keep_alive(own_ws, own)
+        copy(x, s.best[0] if s.best_e[0] < np.inf else s.best[1])
+        linearize(x, ws, TASK, NO, COMPUTE)
+    task_errors(ws, errors)
+    term_values(x, ws, report.values)
+    report.stats[0], report.stats[1], report.stats[2] = iterations, evaluations, restarted
+    keep_alive(owners, own, lazy_table, packed)
     return status
+
+
+@internal
+def _with_table(ws, trial, table) -> None:
+    """Both workspaces read the block table ``table`` from here on."""
+    ws.blocks = trial.blocks = table.ctypes.data
+
+
+@internal
+def draw_start(rng, box, ws, x) -> int:
+    """A new start ``x (n,)`` drawn uniformly in the box from the stream ``rng``, drawn again (up to
+    :data:`CLEAR_DRAWS` times) while a one-sided block of ``ws``'s table is violated there; returns the draws
+    evaluated (0 without one-sided blocks: nothing to be clear of)."""
+    hinged = has_hinges(views(ws).blocks)
+    for k in range(CLEAR_DRAWS if hinged else 1):
+        uniform_in_box(rng, box.lower, box.upper, x)
+        project(x, box)
+        if not hinged or hinges_clear(x, ws):
+            return k + 1 if hinged else 0
+    return CLEAR_DRAWS
+
+
+@internal
+def _start(x, ws, trial, table, s, lazy):
+    """A descent from ``x`` on the task of ``table`` (the lazy one while ``lazy``): its rows and ``‖r‖²``, the
+    best seen updated."""
+    _with_table(ws, trial, table)
+    m = linearize(x, ws, TASK, YES, COMPUTE)
+    e = squared_norm(views(ws).r, m)
+    if e < s.best_e[int(lazy)]:
+        s.best_e[int(lazy)] = e
+        copy(s.best[int(lazy)], x)
+    return m, e
+
+
+@internal
+def _contacts_on(x, ws, trial, table, s):
+    """The contact rows taken on at ``x`` (the rest of the task is met): the whole task's rows and ``‖r‖²``."""
+    _with_table(ws, trial, table)
+    m = linearize(x, ws, TASK, YES, COMPUTE)
+    e = squared_norm(views(ws).r, m)
+    if e < s.best_e[0]:
+        s.best_e[0] = e
+        copy(s.best[0], x)
+    return m, e
+
+
+@internal
+def _step(x, box, ws, trial, s, m, e, damping, landing):
+    """One Levenberg-Marquardt iteration from ``x`` (the rows at ``x`` in ``ws``, ``‖r‖² = e``): the bounded step,
+    evaluated at the trial point in ``trial``; ``x`` moved there when it lowers ``‖r‖``. Returns ``(accepted,
+    evaluations, ‖r‖², damping)``; the caller swaps the workspaces after an accepted step."""
+    n = x.shape[0]
+    cur, tri = views(ws), views(trial)
+    Jw, rw = cur.J[:m], cur.r[:m]
+    if not bounded_step(x, Jw, rw, damping * (e if landing else np.sqrt(e)), box, matrix(s.Jc, m, n), s.A, s.L,
+                        s.y, s.dx):
+        return False, 0, e, damping
+    for i in range(n):
+        s.xt[i] = x[i] + s.dx[i]
+    project(s.xt, box)
+    # poses only where most steps are rejected (landing); elsewhere most are accepted: the Jacobians too
+    linearize(s.xt, trial, TASK, NO if landing else YES, COMPUTE)
+    et = squared_norm(tri.r, m)
+    if not et < e:
+        return False, 1, e, damping
+    factor = LANDING_DAMPING_DOWN if landing else gain_factor(e, et, Jw, rw, x, s.xt, s.dx, box.wraps)
+    damping = max(damping * factor, DAMPING_MIN)
+    if landing:
+        linearize(s.xt, trial, TASK, YES, JACOBIANS_FROM_POSES)
+    copy(x, s.xt)
+    return True, 1, et, damping
+
+
+@internal
+def _polish(x, box, ws, trial, s, m, e, polish):
+    """Up to ``polish`` Gauss-Newton steps after the tolerance is met, kept while they lower ``‖r‖`` (quadratic
+    convergence: one or two steps take it to machine precision). Returns whether the rows at ``x`` are in ``trial``
+    (the workspaces swapped places an odd number of times), and the evaluations."""
+    n = x.shape[0]
+    swapped = False
+    stale = False  # whether ws's Jacobians are behind its poses (taken only for a step that follows)
+    evaluations = 0
+    for _ in range(polish):
+        if e <= POLISHED:
+            break
+        if stale:
+            linearize(x, ws, TASK, YES, JACOBIANS_FROM_POSES)
+        cur = views(ws)
+        lam, et = DAMPING_MIN * e, e
+        for attempt in range(2):  # the Gauss-Newton step; if it fails short of rounding level, damped at the floor
+            if attempt == 1:
+                if e <= ROUNDED:
+                    break
+                lam = max(lam, POLISH_FLOOR * squared_entries(cur.J, m) / n)
+            if not projected_step(x, cur.J[:m], cur.r[:m], lam, box, matrix(s.Jc, m, n), s.pins, s.A, s.L, s.y,
+                                  s.dx):
+                continue
+            for i in range(n):
+                s.xt[i] = x[i] + s.dx[i]
+            project(s.xt, box)
+            linearize(s.xt, trial, TASK, NO, COMPUTE)
+            evaluations += 1
+            et = squared_norm(views(trial).r, m)
+            if et < e:
+                break
+        if not et < e:
+            break
+        ws, trial = trial, ws
+        swapped = not swapped
+        copy(x, s.xt)
+        e, stale = et, True
+    return swapped, evaluations

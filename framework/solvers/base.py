@@ -17,8 +17,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-import numba
 import numpy as np
+
+from ..native import compiled
 
 from framework.errors import LimitsError, SolverError
 from framework.interrupts import graceful_interrupt
@@ -308,7 +309,7 @@ def _evaluate(cost: PopulationCost, X: np.ndarray) -> np.ndarray:
     return np.where(nan, np.inf, F) if nan.any() else F
 
 
-@numba.njit(cache=True)
+@compiled
 def _outside(X, lower, upper):
     """``(pop,)`` True for rows of ``X`` with a coordinate outside ``[lower, upper]`` or not finite."""
     bad = np.zeros(X.shape[0], dtype=np.bool_)

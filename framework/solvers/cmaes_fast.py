@@ -19,19 +19,48 @@ Evaluations: ``population`` per generation.
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
-import numba
 import numpy as np
 
+from framework.costs.kernels import population_cost
 from framework.errors import SolverError
+from framework.native import compiled, internal
 from framework.solvers.base import Algorithm
 from framework.solvers.cmaes import start_point_and_step
-from framework.costs.kernels import population_cost
 from framework.solvers.registry import register
 
 #: Condition number of C above which it is regularized, and relative floor of its eigenvalues.
 MAX_CONDITION = 1e14
+
+
+class Distribution(NamedTuple):
+    """The search distribution's arrays, updated in place: mean, evolution paths (σ's and C's), covariance ``C``,
+    its eigenvectors ``B`` and the square roots of its eigenvalues ``D``, and the recombination weights."""
+
+    mean: np.ndarray
+    ps: np.ndarray
+    pc: np.ndarray
+    C: np.ndarray
+    B: np.ndarray
+    D: np.ndarray
+    weights: np.ndarray
+
+
+class Constants(NamedTuple):
+    """The strategy's constants (Hansen's tutorial): learning rates, damping, expected norm, the longest step of a
+    foreign candidate, the largest σ, and λ."""
+
+    cs: float
+    cc: float
+    c1: float
+    cmu: float
+    mueff: float
+    damps: float
+    chi_n: float
+    max_step: float
+    max_sigma: float
+    population: int
 
 
 @register("cmaes_fast")
@@ -105,9 +134,7 @@ class CMAESFast(Algorithm):
         order = np.argsort(F, kind="stable")[: self.weights.size]
         asked = self._asked if self._asked.shape == X.shape else np.full_like(X, np.nan)
         g = self.generation + 1
-        self.sigma, hsig = _update(X, asked, order, self.mean, self.sigma, self.ps, self.pc, self.C, self.B, self.D,
-                                   self.weights, self.cs, self.cc, self.c1, self.cmu, self.mueff, self.damps,
-                                   self.chi_n, self.max_step, float(g), self._max_sigma)
+        self.sigma, hsig = _update(X, asked, order, self._distribution(), self.sigma, self._constants(), float(g))
         self.generation = g
         if g - self._eigen_generation > self.population / (self.c1 + self.cmu) / self.n / 10:
             self._update_eigensystem()
@@ -126,12 +153,18 @@ class CMAESFast(Algorithm):
         history = np.empty(max_iterations)
         program.refresh()
         box = self.box
-        out = _run(self.rng, program.kin, program.prog, box.lower, box.upper, mode, max_iterations, initial,
-                   self.mean, self.ps, self.pc, self.C, self.B, self.D, self.weights,
-                   np.array([self.sigma, self.cs, self.cc, self.c1, self.cmu, self.mueff, self.damps, self.chi_n,
-                             self.max_step, self._max_sigma, self.population]), best_x, history)
+        out = _run(self.rng, program.packed, box.lower, box.upper, mode, max_iterations, initial, self._distribution(),
+                   self._constants(), self.sigma, best_x, history)
         best_f, self.sigma, evaluations, self.generation, self._eigen_generation = out
         return best_x, best_f, history, evaluations
+
+    def _distribution(self) -> Distribution:
+        return Distribution(self.mean, self.ps, self.pc, self.C, self.B, self.D, self.weights)
+
+    def _constants(self) -> Constants:
+        return Constants(float(self.cs), float(self.cc), float(self.c1), float(self.cmu), float(self.mueff),
+                         float(self.damps), float(self.chi_n), float(self.max_step), float(self._max_sigma),
+                         int(self.population))
 
     def _update_eigensystem(self) -> None:
         """Refresh ``B``, ``D`` from ``C`` (symmetrized, regularized above ``MAX_CONDITION``)."""
@@ -157,7 +190,7 @@ def _check_covariance(C: Any, n: int) -> np.ndarray:
     return 0.5 * (C + C.T)
 
 
-@numba.njit(cache=True)
+@compiled
 def _sample(mean, sigma, B, D, z):
     """``m + sigma B D z`` for each row ``z`` of ``z (lambda, n)``.
 
@@ -182,7 +215,7 @@ def _sample(mean, sigma, B, D, z):
     return X
 
 
-@numba.njit(cache=True)
+@internal
 def _inv_sqrt(B, D, y, out):
     """``out = C^{-1/2} y = B D⁻¹ Bᵀ y``."""
     n = y.shape[0]
@@ -199,12 +232,15 @@ def _inv_sqrt(B, D, y, out):
         out[i] = s
 
 
-@numba.njit(cache=True)
-def _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, mueff, damps, chi_n, max_step, g,
-            max_sigma):
-    """The CMA-ES update from told candidates ``X`` (in place on ``mean, ps, pc, C``); returns the new sigma
-    and h_sigma. Candidates that differ from the ``asked`` ones (repaired, injected) have their step
-    ``y = (x − m)/σ`` shortened to Mahalanobis length ``max_step``, as pycma does."""
+@compiled
+def _update(X, asked, order, state, sigma, k, g):
+    """The CMA-ES update from told candidates ``X`` (in place on the :class:`Distribution` ``state``'s ``mean, ps,
+    pc, C``; ``k``: :class:`Constants`); returns the new sigma and h_sigma. Candidates that differ from the
+    ``asked`` ones (repaired, injected) have their step ``y = (x − m)/σ`` shortened to Mahalanobis length
+    ``max_step``, as pycma does."""
+    mean, ps, pc, C, B, D, w = state
+    cs, cc, c1, cmu, mueff, damps, chi_n, max_step, max_sigma = k.cs, k.cc, k.c1, k.cmu, k.mueff, k.damps, k.chi_n, \
+        k.max_step, k.max_sigma
     mu, n = order.shape[0], X.shape[1]
     y_sel = np.empty((mu, n))
     tmp = np.empty(n)
@@ -252,7 +288,7 @@ def _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, m
     return min(max(new, 1e-300), max_sigma), hsig
 
 
-@numba.njit(cache=True)
+@internal
 def _eigensystem(C, B, D):
     """``B, D`` from ``C`` (symmetrized, regularized above ``MAX_CONDITION``), as ``_update_eigensystem``."""
     n = C.shape[0]
@@ -268,21 +304,22 @@ def _eigensystem(C, B, D):
         for i in range(n):
             C[i, i] += shift
         eigvals, vectors = np.linalg.eigh(C)
-    B[:, :] = vectors
+    for i in range(n):
+        for j in range(n):
+            B[i, j] = vectors[i, j]
     for i in range(n):
         D[i] = np.sqrt(max(eigvals[i], 1e-300))
 
 
-@numba.njit(cache=True)
-def _run(rng, kin, prog, lower, upper, mode, max_iterations, initial, mean, ps, pc, C, B, D, w, consts, best_x,
-         history):
+@compiled
+def _run(rng, packed, lower, upper, mode, max_iterations, initial, state, consts, sigma, best_x, history):
     """``max_iterations`` generations of ask / repair / evaluate / tell (see :meth:`CMAESFast.run_compiled`).
 
-    Returns ``(best f, sigma, evaluations, generation, eigen generation)``; ``mean, ps, pc, C, B, D`` are updated
-    in place, ``best_x`` and ``history`` written."""
-    sigma, cs, cc, c1, cmu, mueff = consts[0], consts[1], consts[2], consts[3], consts[4], consts[5]
-    damps, chi_n, max_step, max_sigma, lam = consts[6], consts[7], consts[8], consts[9], int(consts[10])
-    n, mu = mean.shape[0], w.shape[0]
+    Returns ``(best f, sigma, evaluations, generation, eigen generation)``; the :class:`Distribution` ``state`` is
+    updated in place (``consts``: :class:`Constants`), ``best_x`` and ``history`` written."""
+    mean, B, D, C = state.mean, state.B, state.D, state.C
+    lam, c1, cmu = consts.population, consts.c1, consts.cmu
+    n = mean.shape[0]
     best_f = np.inf
     evaluations, generation, eigen_generation = 0, 0, 0
     F = np.empty(lam)
@@ -311,7 +348,7 @@ def _run(rng, kin, prog, lower, upper, mode, max_iterations, initial, mean, ps, 
                     u = rng.random(n)
                     for i in range(n):
                         X[k, i] = lower[i] + u[i] * (upper[i] - lower[i])
-        population_cost(X, kin, prog, F)
+        population_cost(X, packed, F)
         for k in range(lam):
             if np.isnan(F[k]):
                 F[k] = np.inf
@@ -319,11 +356,11 @@ def _run(rng, kin, prog, lower, upper, mode, max_iterations, initial, mean, ps, 
         i_best = np.argmin(F)
         if F[i_best] < best_f:
             best_f = F[i_best]
-            best_x[:] = X[i_best]
-        order = np.argsort(F, kind="mergesort")[:mu]
+            for i in range(n):
+                best_x[i] = X[i_best, i]
+        order = np.argsort(F, kind="mergesort")[: state.weights.shape[0]]
         generation += 1
-        sigma, hsig = _update(X, asked, order, mean, sigma, ps, pc, C, B, D, w, cs, cc, c1, cmu, mueff, damps,
-                              chi_n, max_step, float(generation), max_sigma)
+        sigma, hsig = _update(X, asked, order, state, sigma, consts, float(generation))
         if generation - eigen_generation > lam / (c1 + cmu) / n / 10:
             eigen_generation = generation
             _eigensystem(C, B, D)
