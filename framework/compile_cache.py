@@ -198,6 +198,16 @@ def is_cached(dispatcher) -> bool:
     return index.is_file() and bool(cache_._cache_file._load_index())
 
 
+def has_signature(dispatcher, signature: tuple) -> bool:
+    """Whether ``dispatcher`` has compiled code for the argument types ``signature`` in the cache (for its current
+    sources and this machine)."""
+    cache_ = getattr(dispatcher, "_cache", None)
+    if not isinstance(cache_, ContentCache):
+        return False
+    key = cache_._index_key(signature, dispatcher.targetctx.codegen())
+    return key in cache_._cache_file._load_index()
+
+
 class CompileNotice:
     """Says on stderr when the package's code compiles — a first use after an install or an edit: the process
     waits seconds then — and how long it took; :attr:`seconds` sums those waits.
@@ -217,14 +227,15 @@ class CompileNotice:
         self._timer: threading.Timer | None = None
         self._said = False
 
-    def start(self, name: str) -> None:
-        """A compile of ``name`` begins (nested compiles are part of the outermost one)."""
+    def start(self, name: str, where: str = "") -> None:
+        """A compile of ``name`` begins (nested compiles are part of the outermost one); ``where``: where it runs,
+        if not in this process."""
         self._depth += 1
         if self._depth == 1:
             self._start = time.perf_counter()
             self._said = False
             if os.environ.get("METAIK_COMPILE_NOTICE", "1") != "0":
-                self._timer = threading.Timer(self.after, self._say, (name,))
+                self._timer = threading.Timer(self.after, self._say, (name, where))
                 self._timer.daemon = True
                 self._timer.start()
 
@@ -241,9 +252,10 @@ class CompileNotice:
             if self._said:
                 self._write(f"{elapsed:.1f} s\n")
 
-    def _say(self, name: str) -> None:
+    def _say(self, name: str, where: str) -> None:
         self._said = True
-        self._write(f"metaik: compiling {name} for this machine (first use, cached afterwards) ... ")
+        self._write(f"metaik: compiling {name} for this machine (first use, cached afterwards"
+                    f"{'; ' + where if where else ''}) ... ")
 
     def _write(self, text: str) -> None:
         stream = self.stream or sys.stderr
@@ -255,16 +267,16 @@ class _Listener(numba_event.Listener):
     """numba's compile events of the package's functions, to :data:`NOTICE`."""
 
     def on_start(self, event) -> None:
-        name = _package_name(event.data.get("dispatcher"))
+        name = package_name(event.data.get("dispatcher"))
         if name:
             NOTICE.start(name)
 
     def on_end(self, event) -> None:
-        if _package_name(event.data.get("dispatcher")):
+        if package_name(event.data.get("dispatcher")):
             NOTICE.end()
 
 
-def _package_name(dispatcher) -> str | None:
+def package_name(dispatcher) -> str | None:
     """``module.function`` of a dispatcher of the package (without the package's name), else ``None``."""
     function = getattr(dispatcher, "py_func", None)
     module = getattr(function, "__module__", "") or ""

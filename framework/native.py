@@ -140,8 +140,9 @@ def record_at(address, dtype):
 
 @internal
 def address_of(a) -> int:
-    """The address of ``a``'s first element."""
-    return a.ctypes.data
+    """The address of ``a``'s first element, as an int64 (as :func:`take` counts addresses from 0: one type for
+    both)."""
+    return np.int64(a.ctypes.data)
 
 
 @internal

@@ -32,6 +32,12 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(20261123)
 
 
+def without_compile_notices(err: str) -> str:
+    """``err`` without the lines saying the package's code compiles (a cold cache's first use; see
+    :class:`framework.compile_cache.CompileNotice`)."""
+    return "".join(line for line in err.splitlines(keepends=True) if not line.startswith("metaik: compiling "))
+
+
 def same_framework_env(**extra: str) -> dict[str, str]:
     """The environment of a child process (a CLI run, a notebook kernel) that imports the framework this test
     process imports: its numba cache is warm, so the child does not compile the engine again."""

@@ -7,7 +7,7 @@ import pytest
 import framework as fw
 from framework.cli import EXIT_INPUT, main
 from framework.errors import LimitsError, TaskError, UnknownJointError
-from tests.conftest import same_framework_env
+from tests.conftest import same_framework_env, without_compile_notices
 
 
 @pytest.mark.parametrize("kwargs, error, message", [
@@ -56,7 +56,7 @@ def test_task_file_mistakes_name_the_table_and_key(tmp_path, capsys, extra, mess
     with pytest.raises(TaskError, match=message):
         load_task(path)
     assert main(["run", str(path)]) == EXIT_INPUT
-    err = capsys.readouterr().err
+    err = without_compile_notices(capsys.readouterr().err)
     assert err.count("\n") == 1 and str(path) in err  # one line, naming the file
 
 

@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..native import internal, view
+from ..native import address_of, internal, view
 from .blocks import BLOCK
 
 i8 = np.int64
@@ -138,7 +138,7 @@ def workspaces(packed, n, count):
     for i in range(count):
         if i > 0:
             records[i] = records[0]
-        _carve(records[i], buffer.ctypes.data + i * size)
+        _carve(records[i], address_of(buffer) + i * size)
     return (buffer, records), records
 
 

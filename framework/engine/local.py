@@ -22,6 +22,7 @@ from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
 from ..native import compiled_entry
+from ..parallel_compile import entry_points
 from ..validate import float_copy
 from . import regularize as newton_phase
 from .derivatives import derivatives_at
@@ -210,25 +211,30 @@ def solve_local(
                                        regularized, multipliers, values if not layout.generic else None))
 
 
-#: :func:`prepare`'s run of the engine: no iteration, no Newton phase (it loads code, it solves nothing).
+#: The settings :func:`prepare` resolves the entry points with (their types are those of any settings).
 _LOADING = LocalSettings(max_iterations=0, regularize=False)
 
 
 def prepare(program: Program) -> None:
     """Load the engine's compiled code for ``program``'s layout, so that a time budget that starts after this is
     not spent on it: numba loads the code from its disk cache (about half a second for the engine) or compiles it
-    (minutes, once per install) on a process's first call. Once per layout; then a dictionary lookup."""
+    (seconds, once per install: the reach loop here, the Newton phase beside it in a helper process,
+    :mod:`framework.parallel_compile`) on a process's first call. Once per layout; then a dictionary lookup."""
     entries = program.layout.entries
     if prepare in entries:
         return
     program.refresh()
-    if program.task_rows:  # the reach loop, run without an iteration
-        solve_local(program, program.robot.middle, stream(0), _LOADING)
-    if program.has_regularizers:  # the Newton phase, resolved (not run: it needs a start on the task)
-        report = Report(np.empty(program.layout.task_tolerances.size), np.zeros(len(program.terms)),
-                        np.zeros(3, dtype=np.int64))
-        _entry(program, newton_phase.regularize, (np.array(program.robot.middle), search_box(program), program.packed,
-                                            _LOADING.newton_settings(0), np.zeros(program.task_rows), report))
+    report = Report(np.empty(program.layout.task_tolerances.size), np.zeros(len(program.terms)),
+                    np.zeros(3, dtype=np.int64))
+    box, x = search_box(program), np.array(program.robot.middle)
+    jobs = []  # the longest compile first (here, while the helper process takes the others)
+    if program.has_regularizers:  # the Newton phase
+        jobs.append((newton_phase.regularize, (x, box, program.packed, _LOADING.newton_settings(0),
+                                               np.zeros(program.task_rows), report)))
+    if program.task_rows:  # the reach loop
+        jobs.append((reach, (x, False, stream(0), box, program.packed, _LOADING.reach_settings(0), report)))
+    for (kernel, _), point in zip(jobs, entry_points(jobs)):  # those not cached compiled side by side
+        entries[kernel] = point
     entries[prepare] = None
 
 

@@ -47,7 +47,7 @@ from ..costs.blocks import LEVEL_REGULARIZER
 from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors,
                              term_values, within_tolerance)
 from ..costs.workspace import views, workspaces
-from ..native import compiled, internal, keep_alive, matrix, take
+from ..native import address_of, compiled, internal, keep_alive, matrix, take
 from .clock import monotonic_ns
 from .draws import uniform_in_box
 from .steps import bounded_step, copy, gain_factor, project, projected_step, squared_entries, squared_norm
@@ -145,7 +145,7 @@ def reach(x, drawn, rng, box, packed, settings, report) -> int:
     full = rows_of(full_table, TASK)
     _, end = scratch(0, n, full)
     own = np.empty(end // 8)
-    s, _ = scratch(own.ctypes.data, n, full)
+    s, _ = scratch(address_of(own), n, full)
     landing = has_contacts or rows_of(full_table, LEVEL_REGULARIZER) > 0  # where the descent lands matters
     drew = max(draw_start(rng, box, ws, x), 1) if drawn else 0
     project(x, box)

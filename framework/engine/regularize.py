@@ -42,7 +42,7 @@ import numpy as np
 from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, REGULARIZERS, REUSE, TASK, YES, level_value,
                              linearize, task_errors, term_values, widen_margins)
 from ..costs.workspace import views, workspaces
-from ..native import compiled, internal, keep_alive, square, view
+from ..native import address_of, compiled, internal, keep_alive, square, view
 from .active_set import BAND, active_rows
 from .clock import monotonic_ns
 from .derivatives import objective_derivatives
@@ -87,7 +87,7 @@ def regularize(x, box, packed, settings, multipliers_out, report) -> int:
     st.ws_rows = W[CUR].rows if st.near_contact else 0
     st.band_params = packed.params.shape[0] if st.near_contact else 0
     own = np.empty(lay_out(st, 0) // 8)
-    lay_out(st, own.ctypes.data)
+    lay_out(st, address_of(own))
     zero_state(st)
     _setup(x, box, packed, W, st, hinge, contact, settings.smoothing)
     status = ITERATIONS

@@ -7,6 +7,7 @@ import pytest
 
 from framework.cli import EXIT_INPUT, main
 from framework.errors import MetaikError
+from tests.conftest import without_compile_notices
 from tests.fuzz.bad_inputs import API_CASES, CLI_CASES
 
 
@@ -19,6 +20,7 @@ def test_cli_bad_input_is_one_line_exit_2(case, tmp_path, monkeypatch, capsys):
         argv = [a.replace("{file}", "t.toml") for a in argv]
     code = main(argv)
     out, err = capsys.readouterr()
+    err = without_compile_notices(err)
     assert code == EXIT_INPUT, (code, out[-2000:], err)
     assert err.count("\n") == 1 and err.startswith("error: "), err
     for name in case.names:

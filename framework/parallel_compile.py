@@ -1,0 +1,109 @@
+"""Compiling several entry points side by side: the first here, the others in a helper process.
+
+numba compiles under a process-wide lock, one function at a time: a problem whose first solve needs two entry
+points not yet in the disk cache (the reach loop and the Newton phase) waited for both in turn, on one core. Here
+the other entry points compile in a helper process — the same interpreter, the same cache folder
+(:mod:`framework.compile_cache`) — while this process compiles the first; this process then loads them from the
+cache. A machine with one core, a process that cannot start a helper (``METAIK_COMPILE_HELPER=0`` too), or a
+helper that fails compile here instead, as without a helper.
+
+The helper is ``python -m framework.parallel_compile``; it reads the pickled ``(module, name, signature)`` jobs on
+its standard input and compiles each with numba's own cache writing (an index and a data file per signature, each
+written whole then renamed: a reader sees the old file or the new one).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+from collections.abc import Sequence
+
+from .compile_cache import NOTICE, has_signature, package_name
+
+#: The environment variable that turns the helper off (``0``).
+ENVIRONMENT = "METAIK_COMPILE_HELPER"
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def entry_points(jobs: Sequence[tuple[object, tuple]]) -> list:
+    """The compiled entry point of each ``(dispatcher, args)`` job for the types of ``args`` (numba's
+    ``dispatcher.compile``: loaded from the disk cache, else compiled), those not cached compiled side by side:
+    the first here, the others in a helper process (list the longest compile first)."""
+    signatures = [tuple(dispatcher.typeof_pyval(a) for a in args) for dispatcher, args in jobs]
+    missing = [k for k, ((dispatcher, _), signature) in enumerate(zip(jobs, signatures))
+               if signature not in dispatcher.overloads and not has_signature(dispatcher, signature)]
+    helper = _start([(jobs[k][0], signatures[k]) for k in missing[1:]]) if len(missing) > 1 else None
+    points = [None] * len(jobs)
+    for k, (dispatcher, _) in enumerate(jobs):
+        if helper is None or k not in missing[1:]:
+            points[k] = dispatcher.compile(signatures[k])
+    if helper is not None:
+        helper.wait(", ".join(package_name(jobs[k][0]) for k in missing[1:]))
+        for k in missing[1:]:
+            points[k] = jobs[k][0].compile(signatures[k])
+    return points
+
+
+class _Helper:
+    """A helper process compiling jobs into the disk cache."""
+
+    def __init__(self, process: subprocess.Popen, errors):
+        self.process = process
+        self.errors = errors
+
+    def wait(self, names: str) -> None:
+        """Wait for the helper (its wait shown as a compile of ``names``); a failure is said on stderr (this
+        process then compiles what the helper did not)."""
+        NOTICE.start(names, where="in a helper process")
+        try:
+            code = self.process.wait()
+        finally:
+            NOTICE.end()
+        if code:
+            self.errors.seek(0)
+            tail = self.errors.read().decode(errors="replace").strip().splitlines()[-3:]
+            sys.stderr.write(f"metaik: the helper process compiling {names} failed (exit {code}): "
+                             f"{' / '.join(tail)}; compiling here\n")
+        self.errors.close()
+
+
+def _start(jobs: list[tuple[object, tuple]]) -> _Helper | None:
+    """A helper process compiling ``(dispatcher, signature)`` jobs, or ``None`` where there is none to start."""
+    if os.environ.get(ENVIRONMENT, "1") == "0" or _cores() < 2 or not sys.executable:
+        return None
+    try:
+        payload = pickle.dumps([(d.py_func.__module__, d.py_func.__qualname__, s) for d, s in jobs])
+    except (AttributeError, pickle.PicklingError):  # pragma: no cover - a signature numba cannot pickle
+        return None
+    errors = tempfile.TemporaryFile()
+    try:
+        process = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
+                                   stdout=subprocess.DEVNULL, stderr=errors,
+                                   env={**os.environ, "METAIK_COMPILE_NOTICE": "0", ENVIRONMENT: "0"})
+        process.stdin.write(payload)
+        process.stdin.close()
+    except OSError:  # pragma: no cover - no process to start here
+        errors.close()
+        return None
+    return _Helper(process, errors)
+
+
+def main() -> None:
+    """The helper: compile the jobs pickled on standard input."""
+    for module, name, signature in pickle.loads(sys.stdin.buffer.read()):
+        dispatcher = getattr(importlib.import_module(module), name)
+        dispatcher.compile(signature)
+
+
+if __name__ == "__main__":
+    main()
