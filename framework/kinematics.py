@@ -252,7 +252,7 @@ def fk_one(x, jint, jgeo, fslot, fgeo, out, W):
             o[9 + r] = w[3 * r] * g[9] + w[3 * r + 1] * g[10] + w[3 * r + 2] * g[11] + w[9 + r]
 
 
-@internal
+@internal(inline=True)
 def _finite(x) -> bool:
     for i in range(x.shape[0]):
         if not np.isfinite(x[i]):
@@ -324,7 +324,7 @@ def frame_jacobians_where(x, jint, jgeo, fslot, out, W, J, need):
             frame_jacobian(f, x, jint, jgeo, fslot, out, W, J)
 
 
-@internal
+@internal(inline=True)
 def frame_jacobian(f, x, jint, jgeo, fslot, out, W, J):
     """Frame ``f``'s Jacobian added into ``J[f] (6, n)`` (zeroed before) along its chain of joints."""
     px, py, pz = out[f, 9], out[f, 10], out[f, 11]

@@ -51,15 +51,20 @@ def compiled(function=None, **options):
     return _one_type_per_value(cached(numba.njit(**OPTIONS, **options)(function)))
 
 
-def internal(function):
+def internal(function=None, *, inline: bool = False):
     """``function`` compiled by numba with :data:`OPTIONS`, callable only from compiled code: linked into each
     caller, which compiles it to machine code (:mod:`framework.linked`; not cached on its own). A call from
-    Python raises :class:`TypeError` (it has no Python entry point)."""
+    Python raises :class:`TypeError` (it has no Python entry point).
+
+    ``inline``: LLVM inlines it into every caller (``alwaysinline``: numba's ``forceinline``; typed and lowered once,
+    unlike numba's ``inline="always"``) — for small helpers on the hot path whose call costs more than their body
+    (views of a record's arrays, most of which the caller drops once inlined; a sine and cosine)."""
+    if function is None:
+        return lambda f: internal(f, inline=inline)
+    options = dict(OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=inline)
     if not linked.available():  # pragma: no cover - a numba without the code library linked.py relies on
-        return Internal(_one_type_per_value(cached(numba.njit(**OPTIONS, no_cpython_wrapper=True,
-                                                              no_cfunc_wrapper=True)(function))))
-    return Internal(_one_type_per_value(numba.njit(**OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True,
-                                                   pipeline_class=linked.PIPELINE)(function)))
+        return Internal(_one_type_per_value(cached(numba.njit(**options)(function))))
+    return Internal(_one_type_per_value(numba.njit(**options, pipeline_class=linked.PIPELINE)(function)))
 
 
 class Internal:
@@ -126,26 +131,26 @@ def call(typingctx, address, record):
     return types.int64(address, record), codegen
 
 
-@internal
+@internal(inline=True)
 def view(address, shape, dtype):
     """A C-contiguous array of ``shape`` (an int or a tuple) and ``dtype`` at ``address``, without an owner."""
     return numba.carray(pointer(address), shape, dtype)
 
 
-@internal
+@internal(inline=True)
 def record_at(address, dtype):
     """The record of ``dtype`` (a numpy structured dtype) at ``address``."""
     return numba.carray(pointer(address), 1, dtype)[0]
 
 
-@internal
+@internal(inline=True)
 def address_of(a) -> int:
     """The address of ``a``'s first element, as an int64 (as :func:`take` counts addresses from 0: one type for
     both)."""
     return np.int64(a.ctypes.data)
 
 
-@internal
+@internal(inline=True)
 def borrow(a):
     """A view of the C-contiguous array ``a`` without an owner (valid while ``a`` is alive)."""
     return numba.carray(pointer(a.ctypes.data), a.shape, a.dtype)
@@ -155,7 +160,7 @@ def borrow(a):
 WORD = 8
 
 
-@internal
+@internal(inline=True)
 def take(at, shape):
     """``(view, next)``: a float64 array of ``shape`` at address ``at`` (without an owner), and the address after it.
 
@@ -165,28 +170,28 @@ def take(at, shape):
     return a, at + WORD * a.size
 
 
-@internal
+@internal(inline=True)
 def take_int(at, shape):
     """:func:`take` for an int64 array."""
     a = numba.carray(pointer(at), shape, np.int64)
     return a, at + WORD * a.size
 
 
-@internal
+@internal(inline=True)
 def take_flags(at, shape):
     """:func:`take` for a boolean array (its region rounded up to whole words)."""
     a = numba.carray(pointer(at), shape, np.bool_)
     return a, at + WORD * ((a.size + WORD - 1) // WORD)
 
 
-@internal
+@internal(inline=True)
 def square(buffer, k):
     """A ``(k, k)`` view (without an owner) of the first ``k²`` entries of the flat ``buffer`` (a ``reshape`` would
     call into numba's runtime on every use; a ``[:k, :k]`` slice would be strided)."""
     return numba.carray(pointer(buffer.ctypes.data), (k, k), np.float64)
 
 
-@internal
+@internal(inline=True)
 def matrix(buffer, rows, cols):
     """A ``(rows, cols)`` view (without an owner) of the first entries of the flat ``buffer``, as :func:`square`."""
     return numba.carray(pointer(buffer.ctypes.data), (rows, cols), np.float64)

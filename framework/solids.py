@@ -30,7 +30,7 @@ def solid_row(code: int, rotation: np.ndarray, center: np.ndarray, dims: Sequenc
                            np.asarray(dims, dtype=float)])
 
 
-@internal
+@internal(inline=True)
 def solid_distance(x, y, z, params, p, g) -> float:
     """Signed distance [m] of the point ``(x, y, z)`` to the solid whose row (:func:`solid_row`) starts at
     ``params[p]`` (negative inside), and its gradient into ``g[:3]``, both in the frame the row is given in.

@@ -36,7 +36,7 @@ _C1, _C2, _C3 = 4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015
 _C4, _C5, _C6 = -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11
 
 
-@internal
+@internal(inline=True)
 def sincos(x: float) -> tuple[float, float]:
     """``(sin x, cos x)`` [x in rad], within one unit in the last place of libm's (see the module)."""
     if not abs(x) <= REDUCED:  # (NaN too)

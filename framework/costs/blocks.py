@@ -87,13 +87,13 @@ class Packed(NamedTuple):
     scratch: np.ndarray
 
 
-@internal
+@internal(inline=True)
 def in_level(block_level, level) -> bool:
     """Whether a block of ``block_level`` is selected by ``level`` (``< 0``: the task and the regularizers)."""
     return block_level == level if level >= 0 else block_level != LEVEL_VALUE
 
 
-@internal
+@internal(inline=True)
 def rho_value(rho, scale, r, row, rows) -> float:
     """The value of a block from its residual ``r[row:row + rows]``."""
     if rho == L1:

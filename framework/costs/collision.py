@@ -88,7 +88,7 @@ def spheres_second_order(ws) -> int:
     return 0
 
 
-@internal
+@internal(inline=True)
 def _point_jacobian(jacobians, f, o, n):
     """``(3, n)``: the Jacobian ``J_p + ω × o`` of the point at offset ``o`` (world axes) from frame ``f``'s
     origin."""
@@ -142,7 +142,7 @@ def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) ->
                       - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
 
 
-@internal
+@internal(inline=True)
 def closest_pair(out, fa, fb, params, p, within, S):
     """``(d, i, j)``: the sphere pair ``i`` of ``a``, ``j`` of ``b`` of the ``SPHERES`` block at ``params[p:]`` whose
     gap ``d = ‖c_ai − c_bj‖ − r_ai − r_bj`` is smallest among those below ``within`` [m] (``(within, -1, -1)``: none),
@@ -175,7 +175,7 @@ def closest_pair(out, fa, fb, params, p, within, S):
     return best, ai, bj
 
 
-@internal
+@internal(inline=True)
 def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
     """:func:`solid_distance` of a world point to the solid at ``params[p:]``, fixed in the world (``fb < 0``) or
     on frame ``fb``; the gradient ``g`` in the world. (One call of :func:`solid_distance`: it is inlined.)"""

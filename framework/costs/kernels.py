@@ -88,7 +88,7 @@ def frames_needed(level, blocks, indices, r, clear_hinges, need) -> None:
             need[block.fb] = 1.0
 
 
-@internal
+@internal(inline=True)
 def rows_clear(r, row, rows) -> bool:
     """Whether the residual rows ``r[row:row + rows]`` are all zero."""
     for c in range(row, row + rows):
@@ -150,7 +150,7 @@ def term_values(x, ws, values) -> None:
         values[block.term] += rho_value(block.rho, block.scale, v.r, 0, block.rows)
 
 
-@internal
+@internal(inline=True)
 def within_tolerance(ws, errors, tol_linear, tol_angular) -> bool:
     """Whether every task block's error (from :func:`task_errors`) is within its tolerance (m or rad)."""
     blocks = views(ws).blocks
@@ -167,7 +167,7 @@ def within_tolerance(ws, errors, tol_linear, tol_angular) -> bool:
     return True
 
 
-@internal
+@internal(inline=True)
 def task_errors(ws, errors) -> None:
     """Each task block's error ``‖r_b‖`` (m or rad) into ``errors``, from the stacked task rows in ``ws``."""
     v = views(ws)

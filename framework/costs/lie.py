@@ -13,13 +13,13 @@ from ..trig import sincos
 TWO_PI = 2.0 * np.pi
 
 
-@internal
+@internal(inline=True)
 def wrap_angle(d):
     """``d`` wrapped to ``[−π, π)``."""
     return d - TWO_PI * np.floor((d + np.pi) / TWO_PI)
 
 
-@internal
+@internal(inline=True)
 def rotation_log(E, r) -> float:
     """``r = log(E)`` (3,) of a rotation ``E`` (9, row-major); returns the angle ``‖r‖`` in ``[0, π]``.
 
@@ -60,7 +60,7 @@ def rotation_log(E, r) -> float:
     return theta
 
 
-@internal
+@internal(inline=True)
 def left_jacobian_inverse(r, L):
     """``J_l⁻¹(r) = I − ½[r]× + (1/θ² − cot(θ/2)/(2θ)) [r]×²`` (3, 3): ``log(exp(ε) exp(r)) ≈ r + J_l⁻¹ ε``."""
     t2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
@@ -83,7 +83,7 @@ def left_jacobian_inverse(r, L):
     L[2, 1] -= 0.5 * r[0]
 
 
-@internal
+@internal(inline=True)
 def on_frame(poses, f, c0, c1, c2):
     """The offset ``R_f c`` (3 scalars) of a point fixed at ``c`` in frame ``f``."""
     return (poses[f, 0] * c0 + poses[f, 1] * c1 + poses[f, 2] * c2,
@@ -91,7 +91,7 @@ def on_frame(poses, f, c0, c1, c2):
             poses[f, 6] * c0 + poses[f, 7] * c1 + poses[f, 8] * c2)
 
 
-@internal
+@internal(inline=True)
 def world_point(poses, f, params, q):
     """The world position (3 scalars) of the point ``params[q:q + 3]`` fixed in frame ``f``."""
     o0, o1, o2 = on_frame(poses, f, params[q], params[q + 1], params[q + 2])

@@ -43,7 +43,7 @@ def orientation_residual(ws) -> int:
     return 3
 
 
-@internal
+@internal(inline=True)
 def orientation_jacobian(jacobians, fa, params, p, r, J, row, n, L3) -> None:
     """``J[row:row + 3] = J_l⁻¹(r) R_tᵀ J_ω`` of an orientation block with residual ``r[row:row + 3] = log(R_tᵀ R)``
     (``R_t``: the target rotation, row-major at ``params[p:p + 9]``); ``L3 (3, 3)`` scratch."""

@@ -37,7 +37,7 @@ def position_second_order(ws) -> int:
     return 0
 
 
-@internal
+@internal(inline=True)
 def translation_jacobian(jacobians, f, minus, J, row, n) -> None:
     """``J[row:row + 3]``: the translation rows of frame ``f``'s Jacobian, less frame ``minus``'s (``-1``: none)."""
     for c in range(3):

@@ -70,7 +70,7 @@ class KinematicViews(NamedTuple):
     need: np.ndarray  # (k,) 1 for the frames whose Jacobians a call computes
 
 
-@internal
+@internal(inline=True)
 def views(ws) -> Views:
     """The arrays of workspace ``ws`` (a :data:`WORKSPACE` record)."""
     n, k, rows = ws.n, ws.frames, ws.rows
@@ -86,7 +86,7 @@ def views(ws) -> Views:
                                                               np.float64))
 
 
-@internal
+@internal(inline=True)
 def kinematic_views(ws) -> KinematicViews:
     """The kinematic tables and scratch of workspace ``ws``."""
     k, J = ws.frames, ws.joint_count
@@ -142,7 +142,7 @@ def workspaces(packed, n, count):
     return (buffer, records), records
 
 
-@internal
+@internal(inline=True)
 def hinge_row(value, r, J, row, want_jacobian, n) -> bool:
     """``r[row] = min(0, value)``; whether the caller writes the row's Jacobian (below zero, and wanted). A clear
     row's Jacobian is zeroed here."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..native import internal
 
 
-@internal
+@internal(inline=True)
 def cholesky_solve(A, b, L, out) -> bool:
     """Solve ``A out = b`` for symmetric positive definite ``A (k, k)`` by Cholesky into ``out (k,)``.
 
@@ -169,7 +169,7 @@ def levenberg_marquardt_step(Jr, r, damping, A, L, g, dx) -> bool:
     return cholesky_solve(A, g, L, dx)
 
 
-@internal
+@internal(inline=True)
 def _moves(Jr, i) -> bool:
     """Whether column ``i`` of ``Jr`` has a nonzero entry (the rows depend on coordinate ``i`` here)."""
     for a in range(Jr.shape[0]):
@@ -230,7 +230,7 @@ def moving_columns_step(Jr, r, damping, A, L, g, dx, nz) -> bool:
     return True
 
 
-@internal
+@internal(inline=True)
 def _reflect(V, beta, j, k, M, col) -> None:
     """Column ``col`` of ``M`` times the ``j``-th Householder reflection ``I − β_j v_j v_jᵀ`` (``v_j = V[j:k, j]``)."""
     s = 0.0

@@ -11,7 +11,7 @@ from .linalg import least_norm_step, levenberg_marquardt_step, moving_columns, m
 DAMPING_DOWN = 1.0 / 3.0
 
 
-@internal
+@internal(inline=True)
 def project(x, box) -> None:
     """``x`` into the box in place: clipped, or wrapped into ``[lower, lower + 2π)`` on full-turn axes."""
     lower, upper, wraps = box
@@ -24,7 +24,7 @@ def project(x, box) -> None:
             x[i] = upper[i]
 
 
-@internal
+@internal(inline=True)
 def copy(target, source) -> None:
     """``target[:] = source`` for 1-D arrays of one length (a loop: a slice assignment compiles a shape check with
     its formatted message)."""
@@ -32,7 +32,7 @@ def copy(target, source) -> None:
         target[i] = source[i]
 
 
-@internal
+@internal(inline=True)
 def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     """The Levenberg-Marquardt step ``dx = −(JᵀJ + λI)⁻¹Jᵀr = −Jᵀ(JJᵀ + λI)⁻¹r``, in the smaller of the two
     systems (``A, L`` flat buffers of at least ``k²`` with ``k = min(m, n)``, ``y`` at least ``max(m, n)``; their
@@ -52,14 +52,14 @@ def damped_step(Jr, r, damping, A, L, y, dx) -> bool:
     return levenberg_marquardt_step(Jr, r, damping, Ak, Lk, y[:k], dx)
 
 
-@internal
+@internal(inline=True)
 def held(x, lower, upper, wraps, d) -> bool:
     """Whether a coordinate at ``x`` in ``[lower, upper]`` (``wraps``: no bounds) sits on a bound that a move in
     direction ``d`` (its sign) pushes through."""
     return not wraps and ((x <= lower and d < 0.0) or (x >= upper and d > 0.0))
 
 
-@internal
+@internal(inline=True)
 def bounded_step(x, Jr, r, damping, box, Jc, A, L, y, dx) -> bool:
     """:func:`damped_step`, then again without the coordinates it would push through a bound they sit on."""
     if not damped_step(Jr, r, damping, A, L, y, dx):
@@ -119,7 +119,7 @@ def projected_step(x, Jr, r, damping, box, Jc, pins, A, L, y, dx) -> bool:
     return True
 
 
-@internal
+@internal(inline=True)
 def gain_factor(e, et, Jr, r, x, xt, dx, wraps) -> float:
     """Nielsen's factor of ``μ`` after an accepted step from ``x`` to ``xt`` that took ``‖r‖²`` from ``e`` to
     ``et``: ``max(DAMPING_DOWN, 1 − (2ρ − 1)³)`` with ``ρ = (e − et) / (e − ‖r + J d‖²)``, ``d`` the step taken
@@ -138,7 +138,7 @@ def gain_factor(e, et, Jr, r, x, xt, dx, wraps) -> float:
     return max(DAMPING_DOWN, 1.0 - t * t * t)
 
 
-@internal
+@internal(inline=True)
 def squared_norm(r, m) -> float:
     """``‖r[:m]‖²``."""
     s = 0.0
@@ -147,7 +147,7 @@ def squared_norm(r, m) -> float:
     return s
 
 
-@internal
+@internal(inline=True)
 def squared_entries(J, m) -> float:
     """``‖J[:m]‖²``: the sum of the squared entries of the first ``m`` rows of ``J``."""
     s = 0.0

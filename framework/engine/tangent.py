@@ -60,7 +60,7 @@ def tangent_scratch(at, n, rows):
     return TangentScratch(W, Vh, beta, Z, HZ, hz, lz, E, Vz, wz, gz, c, p, dn, u, aa, la, ra, y), at
 
 
-@internal
+@internal(inline=True)
 def model_gradient(H, rhs, d, nf, u) -> None:
     """``u = g + H d`` over the ``nf`` free coordinates (``rhs[:nf] = −g``): the model's gradient at ``d``."""
     for i in range(nf):
