@@ -182,10 +182,36 @@ class ContentCache(caching.FunctionCache):
     _impl_class = _ContentImpl
 
 
-def cached(dispatcher):
-    """``dispatcher`` (a numba function or C callback made without ``cache=True``) cached by :class:`ContentCache`."""
+class _LinkedImpl(_ContentImpl):
+    """The cache of a linked-only function (:mod:`framework.linked`): its library is bitcode, read back without
+    machine code (numba's own ``CompileResult._rebuild``, with :func:`framework.linked.unserialize`)."""
+
+    def rebuild(self, target_context, payload):
+        from numba.core.compiler import CompileResult
+
+        from . import linked
+
+        libdata, fndesc, env, signature, objectmode, lifted, typeann, reload_init, referenced_envs = payload
+        library = linked.unserialize(target_context.codegen(), libdata)
+        return CompileResult(target_context=target_context, typing_context=target_context.typing_context,
+                             library=library, environment=env,
+                             entry_point=target_context.get_executable(library, fndesc, env), fndesc=fndesc,
+                             type_annotation=typeann, signature=signature, objectmode=objectmode, lifted=lifted,
+                             typing_error=None, call_helper=None, metadata=None, reload_init=reload_init,
+                             referenced_envs=referenced_envs)
+
+
+class LinkedCache(ContentCache):
+    """:class:`ContentCache` for linked-only functions."""
+
+    _impl_class = _LinkedImpl
+
+
+def cached(dispatcher, *, linked_only: bool = False):
+    """``dispatcher`` (a numba function or C callback made without ``cache=True``) cached by :class:`ContentCache`
+    (``linked_only``: a function of :data:`framework.linked.PIPELINE`, by :class:`LinkedCache`)."""
     function = getattr(dispatcher, "py_func", None) or dispatcher._pyfunc
-    dispatcher._cache = ContentCache(function)
+    dispatcher._cache = (LinkedCache if linked_only else ContentCache)(function)
     return dispatcher
 
 

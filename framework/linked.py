@@ -8,8 +8,10 @@ a helper called only from compiled code is never called by its own address.
 
 Functions compiled with :data:`PIPELINE` (:func:`framework.native.internal`) stop before that: their module is
 linked into each caller, which optimizes it and generates its code once, in its own context (LLVM inlines the small
-ones there). They cannot be called from Python (they have no Python wrapper either) and are not cached on disk:
-their callers' cached code holds them.
+ones there). They cannot be called from Python (they have no Python wrapper either) and have no machine code of
+their own: their callers' cached code holds it. They are cached on disk as their module's bitcode (callees linked
+in), which a caller compiled later — in another process too — links as it would the fresh module: an edit retypes the
+functions it changes, and a helper process can type a subtree while another types the rest.
 
 This relies on numba's pipeline classes (``pipeline_class=``, a public option) and on two methods of numba's
 code library; :func:`available` tells whether this numba version has what it needs, else
@@ -18,6 +20,7 @@ code library; :func:`available` tells whether this numba version has what it nee
 
 from __future__ import annotations
 
+import llvmlite.binding as llvm
 from numba.core import codegen
 from numba.core.compiler import CompilerBase, DefaultPassBuilder
 from numba.core.compiler_lock import require_global_compiler_lock
@@ -41,6 +44,12 @@ class _LinkedOnlyLibrary(codegen.JITCodeLibrary):
 
     def get_pointer_to_function(self, name):  # no machine code: no address
         return 0
+
+    def serialize_using_object_code(self):
+        """The library as numba's disk cache keeps it (numba asks every library it saves for this): its module's
+        bitcode, its callees linked in — it has no machine code. :func:`unserialize` reads it back."""
+        self._ensure_finalized()
+        return (self.name, LINKED, self._final_module.as_bitcode())
 
     @property
     def codegen(self):
@@ -85,6 +94,20 @@ class LinkedOnlyCompiler(CompilerBase):
 
 #: The pipeline class of linked-only functions.
 PIPELINE = LinkedOnlyCompiler
+#: The serialization kind of a linked-only library in the disk cache (numba's own are "object" and "bitcode").
+LINKED = "linked-only bitcode"
+
+
+def unserialize(code_generator, state: tuple) -> _LinkedOnlyLibrary:
+    """A linked-only library from the disk cache (:meth:`_LinkedOnlyLibrary.serialize_using_object_code`), ready
+    to be linked into callers: no optimization, no machine code."""
+    name, kind, data = state
+    if kind != LINKED:
+        raise ValueError(f"not a linked-only library: {kind!r}")
+    library = _LinkedOnlyLibrary(code_generator, name)
+    library._final_module = llvm.parse_bitcode(data)
+    library._finalized = True
+    return library
 
 
 def available() -> bool:

@@ -53,7 +53,7 @@ def compiled(function=None, **options):
 
 def internal(function=None, *, inline: bool = False):
     """``function`` compiled by numba with :data:`OPTIONS`, callable only from compiled code: linked into each
-    caller, which compiles it to machine code (:mod:`framework.linked`; not cached on its own). A call from
+    caller, which compiles it to machine code (:mod:`framework.linked`; cached as bitcode). A call from
     Python raises :class:`TypeError` (it has no Python entry point).
 
     ``inline``: LLVM inlines it into every caller (``alwaysinline``: numba's ``forceinline``; typed and lowered once,
@@ -64,7 +64,8 @@ def internal(function=None, *, inline: bool = False):
     options = dict(OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True, forceinline=inline)
     if not linked.available():  # pragma: no cover - a numba without the code library linked.py relies on
         return Internal(_one_type_per_value(cached(numba.njit(**options)(function))))
-    return Internal(_one_type_per_value(numba.njit(**options, pipeline_class=linked.PIPELINE)(function)))
+    return Internal(_one_type_per_value(cached(numba.njit(**options, pipeline_class=linked.PIPELINE)(function),
+                                               linked_only=True)))
 
 
 class Internal:

@@ -35,14 +35,31 @@ def _cores() -> int:
         return os.cpu_count() or 1
 
 
-def entry_points(jobs: Sequence[tuple[object, tuple]]) -> list:
+def entry_points(jobs: Sequence[tuple[object, tuple]], callees: Sequence[tuple[object, tuple]] = ()) -> list:
     """The compiled entry point of each ``(dispatcher, args)`` job for the types of ``args`` (numba's
     ``dispatcher.compile``: loaded from the disk cache, else compiled), those not cached compiled side by side:
-    the first here, the others in a helper process (list the longest compile first)."""
-    signatures = [tuple(dispatcher.typeof_pyval(a) for a in args) for dispatcher, args in jobs]
+    the first here, the others in a helper process (list the longest compile first).
+
+    ``callees``: ``(function, args)`` of large linked-only callees of the first job (:func:`framework.native.internal`,
+    cached as bitcode), the first of them the largest. When the first job compiles, the helper takes that largest
+    callee before its other jobs while this process compiles the other callees; the first job then compiles here
+    with the callees loaded from the cache."""
+    signatures = [_signature(dispatcher, args) for dispatcher, args in jobs]
     missing = [k for k, ((dispatcher, _), signature) in enumerate(zip(jobs, signatures))
-               if signature not in dispatcher.overloads and not has_signature(dispatcher, signature)]
-    helper = _start([(jobs[k][0], signatures[k]) for k in missing[1:]]) if len(missing) > 1 else None
+               if not _ready(dispatcher, signature)]
+    parts = []
+    if missing[:1] == [0]:
+        parts = [(_dispatcher(c), _signature(c, args)) for c, args in callees]
+        parts = [(d, s) for d, s in parts if not _ready(d, s)]
+    ahead = parts[:1] if parts and parts[0][0] is _dispatcher(callees[0][0]) else []
+    beside = ahead + [(jobs[k][0], signatures[k]) for k in missing[1:]]
+    helper = _start(beside) if beside else None
+    if helper is None:
+        ahead = []
+    for dispatcher, signature in parts[len(ahead):] + ahead:  # the helper's callee is compiled here if it fails
+        if ahead and (dispatcher, signature) == ahead[0]:
+            helper.wait(package_name(dispatcher), jobs=1)
+        dispatcher.compile(signature)
     points = [None] * len(jobs)
     for k, (dispatcher, _) in enumerate(jobs):
         if helper is None or k not in missing[1:]:
@@ -54,21 +71,47 @@ def entry_points(jobs: Sequence[tuple[object, tuple]]) -> list:
     return points
 
 
+def _dispatcher(function):
+    """The numba dispatcher of a compiled function (a linked-only one's, :class:`framework.native.Internal`)."""
+    return getattr(function, "dispatcher", function)
+
+
+def _signature(function, args: tuple) -> tuple:
+    dispatcher = _dispatcher(function)
+    return tuple(dispatcher.typeof_pyval(a) for a in args)
+
+
+def _ready(dispatcher, signature: tuple) -> bool:
+    """Whether ``dispatcher`` has code for ``signature`` in this process or in the disk cache."""
+    return signature in dispatcher.overloads or has_signature(dispatcher, signature)
+
+
 class _Helper:
-    """A helper process compiling jobs into the disk cache."""
+    """A helper process compiling jobs into the disk cache; it writes a line on its standard output as each job
+    is done."""
 
     def __init__(self, process: subprocess.Popen, errors):
         self.process = process
         self.errors = errors
+        self.done = 0
+        self.ended = False
 
-    def wait(self, names: str) -> None:
-        """Wait for the helper (its wait shown as a compile of ``names``); a failure is said on stderr (this
-        process then compiles what the helper did not)."""
+    def wait(self, names: str, jobs: int | None = None) -> None:
+        """Wait for the helper — for its first ``jobs`` jobs, or until it ends — the wait shown as a compile of
+        ``names``; a failure is said on stderr (this process then compiles what the helper did not)."""
+        if self.ended:
+            return
         NOTICE.start(names, where="in a helper process")
         try:
+            while jobs is not None and self.done < jobs and self.process.stdout.readline():
+                self.done += 1
+            if jobs is not None and self.done >= jobs:
+                return
             code = self.process.wait()
         finally:
             NOTICE.end()
+        self.ended = True
+        self.process.stdout.close()
         if code:
             self.errors.seek(0)
             tail = self.errors.read().decode(errors="replace").strip().splitlines()[-3:]
@@ -88,7 +131,7 @@ def _start(jobs: list[tuple[object, tuple]]) -> _Helper | None:
     errors = tempfile.TemporaryFile()
     try:
         process = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
-                                   stdout=subprocess.DEVNULL, stderr=errors,
+                                   stdout=subprocess.PIPE, stderr=errors,
                                    env={**os.environ, "METAIK_COMPILE_NOTICE": "0", ENVIRONMENT: "0"})
         process.stdin.write(payload)
         process.stdin.close()
@@ -101,8 +144,8 @@ def _start(jobs: list[tuple[object, tuple]]) -> _Helper | None:
 def main() -> None:
     """The helper: compile the jobs pickled on standard input."""
     for module, name, signature in pickle.loads(sys.stdin.buffer.read()):
-        dispatcher = getattr(importlib.import_module(module), name)
-        dispatcher.compile(signature)
+        _dispatcher(getattr(importlib.import_module(module), name)).compile(signature)
+        print("done", flush=True)
 
 
 if __name__ == "__main__":

@@ -43,7 +43,6 @@ def replay_command(args: argparse.Namespace, console: Any) -> int:
     for entity in recording.entities:
         if entity.startswith("/tracking/") and "settings" not in entity:
             _, values = recording.scalars(entity, "waypoint")
-            console.print(
-                f"  {entity}: {len(values)} waypoints, mean {values.mean():.3e}, max {values.max():.3e}"
-            )
+            spread = f", mean {values.mean():.3e}, max {values.max():.3e}" if values.size else ""
+            console.print(f"  {entity}: {len(values)} waypoints{spread}", markup=False)
     return 0

@@ -227,13 +227,14 @@ def prepare(program: Program) -> None:
     report = Report(np.empty(program.layout.task_tolerances.size), np.zeros(len(program.terms)),
                     np.zeros(3, dtype=np.int64))
     box, x = search_box(program), np.array(program.robot.middle)
-    jobs = []  # the longest compile first (here, while the helper process takes the others)
+    jobs, callees = [], []  # the longest compile first (here, while the helper process takes the others)
     if program.has_regularizers:  # the Newton phase
-        jobs.append((newton_phase.regularize, (x, box, program.packed, _LOADING.newton_settings(0),
-                                               np.zeros(program.task_rows), report)))
+        arguments = (x, box, program.packed, _LOADING.newton_settings(0), np.zeros(program.task_rows), report)
+        jobs.append((newton_phase.regularize, arguments))
+        callees = newton_phase.parts(*arguments)
     if program.task_rows:  # the reach loop
         jobs.append((reach, (x, False, stream(0), box, program.packed, _LOADING.reach_settings(0), report)))
-    for (kernel, _), point in zip(jobs, entry_points(jobs)):  # those not cached compiled side by side
+    for (kernel, _), point in zip(jobs, entry_points(jobs, callees)):  # those not cached compiled side by side
         entries[kernel] = point
     entries[prepare] = None
 
