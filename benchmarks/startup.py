@@ -241,8 +241,8 @@ def cache_lasts(scratch: Path, cache: Path) -> list[str]:
         for path in (copy / "framework").rglob("*"):
             path.chmod(path.stat().st_mode | 0o200)
     for module, what in (("costs/position.py", "a term module (its kernel recompiles)"),
-                         ("engine/newton_search.py", "an engine module (the Newton phase recompiles, not the reach "
-                                                     "loop)")):
+                         ("engine/newton_search.py", "an engine module (the functions of the Newton phase that "
+                                                     "import it retype, the rest loads as bitcode)")):
         path = copy / "framework" / module
         path.write_text(path.read_text() + "\n# edited\n")
         first(f"the copy after an edit of `{module}`: {what}", copy)
@@ -284,7 +284,7 @@ CHAINS = (("UR5", "ur_description/urdf/ur5_robot.urdf", "tool0"),
 POSES, POSE_CHUNK = 1500, 250
 BATCH, BATCH_CHUNK = 8000, 2000
 YOUBOT, YOUBOT_CHUNK = 300, 50
-PATHS = 6
+PATHS, PATH_CHUNK = 40, 5
 COLLIDING, COLLIDING_CHUNK = 60, 15
 #: The README's previous configuration of the dual youBot.
 Q_PREV = (0, 0, 1.5707963267948966, -1.5707963267948966, 1.5707963267948966, -0.7853981633974483,
@@ -420,7 +420,7 @@ WORKLOADS = (("pose0", "UR5 pose IK, new Problem per pose", POSES, POSE_CHUNK, "
              ("pose2", "Baxter left arm pose IK", POSES, POSE_CHUNK, "ms"),
              ("batch", "UR5 `solve_batch`, 2 threads", BATCH, BATCH_CHUNK, "IK/s"),
              ("youbot", "README's youBot problem, random reachable targets", YOUBOT, YOUBOT_CHUNK, "ms"),
-             ("path", "200-point path (README's `track`, paper 000 sinusoid)", PATHS, 1, "ms"),
+             ("path", "200-point path (README's `track`, paper 000 sinusoid)", PATHS, PATH_CHUNK, "ms"),
              ("colliding", "youBot + `SelfCollision`, targets the unconstrained solve collides on", COLLIDING,
               COLLIDING_CHUNK, "ms"))
 
