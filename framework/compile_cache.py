@@ -31,6 +31,8 @@ from numba.core import caching
 from numba.core import config as numba_config
 from numba.core import event as numba_event
 
+from .interrupts import stop_at_once
+
 PACKAGE = Path(__file__).resolve().parent
 #: numba's settings that change the machine code it caches (``numba.core.config`` attributes).
 CODEGEN_SETTINGS = ("OPT", "BOUNDSCHECK", "DEBUGINFO_DEFAULT", "ENABLE_PROFILING", "FASTMATH", "CPU_NAME",
@@ -252,12 +254,15 @@ class CompileNotice:
         self._start = 0.0
         self._timer: threading.Timer | None = None
         self._said = False
+        self._stop_at_once = None
 
     def start(self, name: str, where: str = "") -> None:
         """A compile of ``name`` begins (nested compiles are part of the outermost one); ``where``: where it runs,
         if not in this process."""
         self._depth += 1
         if self._depth == 1:
+            self._stop_at_once = stop_at_once()  # a Ctrl-C stops a compile at once
+            self._stop_at_once.__enter__()
             self._start = time.perf_counter()
             self._said = False
             if os.environ.get("METAIK_COMPILE_NOTICE", "1") != "0":
@@ -269,6 +274,7 @@ class CompileNotice:
         """The compile begun last ends."""
         self._depth -= 1
         if self._depth == 0:
+            self._stop_at_once.__exit__(None, None, None)
             elapsed = time.perf_counter() - self._start
             self.seconds += elapsed
             if self._timer is not None:

@@ -10,15 +10,33 @@ from contextlib import contextmanager
 
 class Interrupt:
     """SIGINT handler: the first signal sets ``requested`` (finish the step in flight, then stop); a second
-    raises ``KeyboardInterrupt`` at once."""
+    raises ``KeyboardInterrupt`` at once, and so does a first one while ``at_once`` is above zero (set by
+    :func:`stop_at_once` around steps that last seconds with nothing to finish, e.g. a compile)."""
 
     def __init__(self) -> None:
         self.requested = False
+        self.at_once = 0
 
     def __call__(self, signum, frame) -> None:
-        if self.requested:
+        if self.requested or self.at_once:
+            self.requested = True
             raise KeyboardInterrupt
         self.requested = True
+
+
+@contextmanager
+def stop_at_once() -> Iterator[None]:
+    """A block a Ctrl-C stops at once even inside :func:`graceful_interrupt` (its handler raises
+    ``KeyboardInterrupt`` instead of setting a flag the block would only read after it ends)."""
+    handler = signal.getsignal(signal.SIGINT)
+    if not isinstance(handler, Interrupt):
+        yield
+        return
+    handler.at_once += 1
+    try:
+        yield
+    finally:
+        handler.at_once -= 1
 
 
 @contextmanager

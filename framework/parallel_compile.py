@@ -56,18 +56,23 @@ def entry_points(jobs: Sequence[tuple[object, tuple]], callees: Sequence[tuple[o
     helper = _start(beside) if beside else None
     if helper is None:
         ahead = []
-    for dispatcher, signature in parts[len(ahead):] + ahead:  # the helper's callee is compiled here if it fails
-        if ahead and (dispatcher, signature) == ahead[0]:
-            helper.wait(package_name(dispatcher), jobs=1)
-        dispatcher.compile(signature)
-    points = [None] * len(jobs)
-    for k, (dispatcher, _) in enumerate(jobs):
-        if helper is None or k not in missing[1:]:
-            points[k] = dispatcher.compile(signatures[k])
-    if helper is not None:
-        helper.wait(", ".join(package_name(jobs[k][0]) for k in missing[1:]))
-        for k in missing[1:]:
-            points[k] = jobs[k][0].compile(signatures[k])
+    try:
+        for dispatcher, signature in parts[len(ahead):] + ahead:  # the helper's callee compiles here if it fails
+            if ahead and (dispatcher, signature) == ahead[0]:
+                helper.wait(package_name(dispatcher), jobs=1)
+            dispatcher.compile(signature)
+        points = [None] * len(jobs)
+        for k, (dispatcher, _) in enumerate(jobs):
+            if helper is None or k not in missing[1:]:
+                points[k] = dispatcher.compile(signatures[k])
+        if helper is not None:
+            helper.wait(", ".join(package_name(jobs[k][0]) for k in missing[1:]))
+            for k in missing[1:]:
+                points[k] = jobs[k][0].compile(signatures[k])
+    except BaseException:  # Ctrl-C (or an error) here: the helper stops too
+        if helper is not None:
+            helper.stop()
+        raise
     return points
 
 
@@ -95,6 +100,15 @@ class _Helper:
         self.errors = errors
         self.done = 0
         self.ended = False
+
+    def stop(self) -> None:
+        """End the helper now (what it has cached stays)."""
+        if not self.ended:
+            self.ended = True
+            self.process.kill()
+            self.process.wait()
+            self.process.stdout.close()
+            self.errors.close()
 
     def wait(self, names: str, jobs: int | None = None) -> None:
         """Wait for the helper — for its first ``jobs`` jobs, or until it ends — the wait shown as a compile of
@@ -132,12 +146,16 @@ def _start(jobs: list[tuple[object, tuple]]) -> _Helper | None:
     try:
         process = subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
                                    stdout=subprocess.PIPE, stderr=errors,
-                                   env={**os.environ, "METAIK_COMPILE_NOTICE": "0", ENVIRONMENT: "0"})
-        process.stdin.write(payload)
-        process.stdin.close()
+                                   env={**os.environ, "METAIK_COMPILE_NOTICE": "0", ENVIRONMENT: "0"},
+                                   start_new_session=True)  # a Ctrl-C at the terminal is this process's to handle
     except OSError:  # pragma: no cover - no process to start here
         errors.close()
         return None
+    try:
+        process.stdin.write(payload)
+        process.stdin.close()
+    except OSError:  # it ended before reading its jobs: a failed helper, which its wait reports
+        pass
     return _Helper(process, errors)
 
 

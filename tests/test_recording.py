@@ -370,3 +370,24 @@ def test_a_torn_recording_reads_up_to_its_last_complete_message(run_file, tmp_pa
         assert read_recording(repaired).entities == rec.entities
     assert recovered_counts == sorted(recovered_counts) and recovered_counts[-1] == len(X_whole)
     assert 0 < messages and end < len(data)
+
+
+def test_recordings_a_stopped_run_leaves_read_back(solved, tmp_path):
+    """An empty file says it is empty (one error naming it); a path logged with no waypoint (a run stopped before
+    its first) reads back with the robot and no waypoint, and its summary says so."""
+    from framework.recording import Recorder
+
+    empty = tmp_path / "empty.rrd"
+    empty.write_bytes(b"")
+    with pytest.raises(RecordingError, match="is empty"):
+        read_recording(empty)
+    task, _ = solved
+    path = tmp_path / "stopped.rrd"
+    with Recorder(path, task.robot) as recorder:
+        recorder.log_path(np.zeros((0, task.robot.n)), errors={"position_error": np.zeros(0)}, name="stopped")
+    recording = read_recording(path)
+    assert recording.complete and "/world/robot/configuration" in recording.entities
+    assert "no waypoints" in recording.text("/tracking/stopped/settings")
+    console = _Console()
+    assert replay_command(argparse.Namespace(recording=str(path), summary=True), console) == 0
+    assert any("0 waypoints" in line for line in console.lines), console.lines

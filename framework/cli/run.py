@@ -48,21 +48,26 @@ def run_command(args, console: Console) -> int:
     table.add_column("")
     rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
                                                    "evaluations", "time (s)")}
-    all_ok = True
+    all_ok, interrupted, solved = True, False, None
     with console.status("solving") as status, _recorder(args, task, settings) as recorder:
         for case in cases:
             status.update(f"solving {case.name}")
-            result = solve(
-                case.problem,
-                solver,
-                seed=settings.get("seed", 0),
-                max_iterations=settings.get("max_iterations", 1000),
-                population=settings.get("population", 30),
-                tolerance=settings.get("tolerance", 1e-4),
-                stop_at_tolerance=settings.get("stop_at_tolerance", False),
-                options=settings.get("options"),
-                callback=recorder.term_logger(case.problem, case.name) if recorder else None,
-            )
+            try:
+                result = solve(
+                    case.problem,
+                    solver,
+                    seed=settings.get("seed", 0),
+                    max_iterations=settings.get("max_iterations", 1000),
+                    population=settings.get("population", 30),
+                    tolerance=settings.get("tolerance", 1e-4),
+                    stop_at_tolerance=settings.get("stop_at_tolerance", False),
+                    options=settings.get("options"),
+                    callback=recorder.term_logger(case.problem, case.name) if recorder else None,
+                )
+            except KeyboardInterrupt:  # a second Ctrl-C, or one while the solver's code compiled: no result
+                interrupted = True
+                break
+            solved = (case, result)
             if recorder:
                 recorder.log_case(case, result)
             interrupted = result.stop_reason == "interrupted"
@@ -81,13 +86,15 @@ def run_command(args, console: Console) -> int:
     for label, cells in rows.items():
         table.add_row(escape(label), *cells)
     console.print(table)
-    x = result.configuration
-    groups = task.robot.groups or {"all": np.arange(task.robot.n)}
-    console.print(f"configuration of {cases[-1].name}: " + "; ".join(
-        f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
+    if solved is not None:
+        x = solved[1].configuration
+        groups = task.robot.groups or {"all": np.arange(task.robot.n)}
+        console.print(f"configuration of {solved[0].name}: " + "; ".join(
+            f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
     _recorded(args, console)
     if interrupted:
-        Console(stderr=True).print(f"interrupted during {case.name!r}: {len(table.columns) - 1} of {len(cases)} cases shown")
+        Console(stderr=True).print(f"interrupted during {case.name!r}: {len(table.columns) - 1} of {len(cases)} "
+                                   "cases shown", highlight=False)
         return EXIT_INTERRUPTED
     return EXIT_OK if all_ok else EXIT_MISSED
 
@@ -158,18 +165,24 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     cases = [c for c in task.cases if not args.case or c.name in args.case]
     if not cases:
         raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
-    console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
-                  f"({settings.get('max_iterations', 300)} iterations per point): {task.description}")
     tolerance = settings.get("tolerance", 1e-4)
     results: list = []
-    with _recorder(args, task, settings) as recorder, _waypoint_csv(args.output, task.robot) as csv_row:
-        interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results, csv_row)
+    try:
+        with _recorder(args, task, settings) as recorder, _waypoint_csv(args.output, task.robot) as csv_row:
+            console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
+                          f"({settings.get('max_iterations', 300)} iterations per point): {task.description}")
+            interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results, csv_row)
+    except KeyboardInterrupt:  # before the tracking loop took over Ctrl-C (files opening, the problem's code
+        interrupted = True  # compiling): what was done is in the table, the CSV and the recording
     console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
     if args.output is not None:
         console.print(f"wrote {args.output}")
     _recorded(args, console)
     if interrupted:
-        Console(stderr=True).print("interrupted: the table shows the waypoints done")
+        done = sum(len(result) for _, result in results)
+        total = sum(case.trajectory.K for case in cases)
+        Console(stderr=True).print(f"interrupted: {done} of {total} waypoints solved (the table shows them)",
+                                   highlight=False)
         return EXIT_INTERRUPTED
     return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
 

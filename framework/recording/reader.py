@@ -138,6 +138,8 @@ def read_recording(path: str | Path) -> Recording:
     path = Path(path)
     if not path.is_file():
         raise RecordingError(f"recording {path} does not exist")
+    if path.stat().st_size == 0:
+        raise RecordingError(f"recording {path} is empty: its writer stopped before writing anything")
     try:
         recording = _read(path, path)
         if recording.complete:

@@ -441,12 +441,12 @@ class Recorder:
             stream.send_columns(
                 f"tracking/{slug}/{entity}", indexes=[waypoints], columns=rr.Scalars.columns(scalars=values)
             )
-        span = f"{K} waypoints (timeline waypoint {first}..{first + K - 1})"
+        span = f"{K} waypoints (timeline waypoint {first}..{first + K - 1})" if K else "no waypoints"
         lines = [f"# {name or slug}", "", f"{span}, frames {', '.join(frames)}", ""]
         lines += [f"- {k}: {v}" for k, v in (settings or {}).items()]
         for label, values in (errors or {}).items():
             v = np.asarray(values, dtype=float)
-            lines.append(f"- {label}: mean {v.mean():.3e}, max {v.max():.3e}")
+            lines.append(f"- {label}: mean {v.mean():.3e}, max {v.max():.3e}" if v.size else f"- {label}: none")
         stream.log(
             f"tracking/{slug}/settings",
             rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN),
