@@ -27,6 +27,12 @@ def _waypoints() -> int:
 WAYPOINTS = _waypoints()
 
 
+def _default_sigint() -> None:
+    """Ctrl-C's default action in the child, as in a terminal (a test run started in the background of a
+    non-interactive shell ignores SIGINT, and a child would inherit that)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 class _Run:
     """A ``metaik run`` subprocess whose stdout and stderr are read as they come."""
 
@@ -34,7 +40,8 @@ class _Run:
         env = same_framework_env(PYTHONUNBUFFERED="1", **environment)
         self.process = subprocess.Popen(
             [sys.executable, "-m", "framework.cli", "run", TASK, "--record", "r.rrd", "--output", "r.csv",
-             "--no-progress", *arguments], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=folder, env=env)
+             "--no-progress", *arguments], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=folder, env=env,
+            preexec_fn=_default_sigint)
         self.folder = folder
         self.out, self.err = bytearray(), bytearray()
         self._readers = [threading.Thread(target=self._read, args=(s, b), daemon=True)
