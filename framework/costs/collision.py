@@ -101,7 +101,7 @@ def _point_jacobian(jacobians, f, o, n):
     return D
 
 
-@internal
+@internal(inline=True)
 def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
     """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_ij ‖(p_a + R_a c_ai) − (p_b + R_b c_bj)‖ − r_ai
     − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
@@ -193,7 +193,7 @@ def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
     return sd
 
 
-@internal
+@internal(inline=True)
 def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
     """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
     frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
