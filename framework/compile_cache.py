@@ -31,7 +31,7 @@ from numba.core import caching
 from numba.core import config as numba_config
 from numba.core import event as numba_event
 
-from .interrupts import stop_at_once
+from .interrupts import held_interrupt
 
 PACKAGE = Path(__file__).resolve().parent
 #: numba's settings that change the machine code it caches (``numba.core.config`` attributes).
@@ -254,15 +254,16 @@ class CompileNotice:
         self._start = 0.0
         self._timer: threading.Timer | None = None
         self._said = False
-        self._stop_at_once = None
+        self._held = None
+        self.interrupt = None
 
     def start(self, name: str, where: str = "") -> None:
         """A compile of ``name`` begins (nested compiles are part of the outermost one); ``where``: where it runs,
         if not in this process."""
         self._depth += 1
         if self._depth == 1:
-            self._stop_at_once = stop_at_once()  # a Ctrl-C stops a compile at once
-            self._stop_at_once.__enter__()
+            self._held = held_interrupt()  # a Ctrl-C stops the compile at its next function (numba's events)
+            self.interrupt = self._held.__enter__()
             self._start = time.perf_counter()
             self._said = False
             if os.environ.get("METAIK_COMPILE_NOTICE", "1") != "0":
@@ -274,7 +275,7 @@ class CompileNotice:
         """The compile begun last ends."""
         self._depth -= 1
         if self._depth == 0:
-            self._stop_at_once.__exit__(None, None, None)
+            held, self._held, self.interrupt = self._held, None, None
             elapsed = time.perf_counter() - self._start
             self.seconds += elapsed
             if self._timer is not None:
@@ -283,6 +284,7 @@ class CompileNotice:
                 self._timer = None
             if self._said:
                 self._write(f"{elapsed:.1f} s\n")
+            held.__exit__(None, None, None)  # raises KeyboardInterrupt if one was held
 
     def _say(self, name: str, where: str) -> None:
         self._said = True
@@ -306,6 +308,13 @@ class _Listener(numba_event.Listener):
     def on_end(self, event) -> None:
         if package_name(event.data.get("dispatcher")):
             NOTICE.end()
+            _stop_if_asked()
+
+
+def _stop_if_asked() -> None:
+    """A safe point of a compile (a function's compile ended): a Ctrl-C held since stops it here."""
+    if NOTICE.interrupt is not None and NOTICE.interrupt.requested:
+        raise KeyboardInterrupt
 
 
 def package_name(dispatcher) -> str | None:

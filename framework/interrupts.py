@@ -11,7 +11,7 @@ from contextlib import contextmanager
 class Interrupt:
     """SIGINT handler: the first signal sets ``requested`` (finish the step in flight, then stop); a second
     raises ``KeyboardInterrupt`` at once, and so does a first one while ``at_once`` is above zero (set by
-    :func:`stop_at_once` around steps that last seconds with nothing to finish, e.g. a compile)."""
+    :func:`stop_at_once` around waits that last seconds with nothing to finish, e.g. for a compile helper)."""
 
     def __init__(self) -> None:
         self.requested = False
@@ -37,6 +37,33 @@ def stop_at_once() -> Iterator[None]:
         yield
     finally:
         handler.at_once -= 1
+
+
+@contextmanager
+def held_interrupt() -> Iterator[Interrupt | None]:
+    """A block during which a Ctrl-C is held as a request (an :class:`Interrupt`, the one in place or a new one)
+    for the block to act on at its safe points, and raised as ``KeyboardInterrupt`` at its end if it did not —
+    for numba's compiles, where a ``KeyboardInterrupt`` raised inside LLVM's callbacks is lost and leaves numba's
+    state broken. ``None`` where SIGINT is not Python's default (ignored, or someone else's) or not this thread's."""
+    handler = signal.getsignal(signal.SIGINT)
+    if isinstance(handler, Interrupt):
+        yield handler
+        return
+    if handler is not signal.default_int_handler:
+        yield None
+        return
+    flag = Interrupt()
+    try:
+        signal.signal(signal.SIGINT, flag)
+    except ValueError:  # not the main thread
+        yield None
+        return
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, handler)
+    if flag.requested:
+        raise KeyboardInterrupt
 
 
 @contextmanager

@@ -23,6 +23,7 @@ import tempfile
 from collections.abc import Sequence
 
 from .compile_cache import NOTICE, has_signature, package_name
+from .interrupts import stop_at_once
 
 #: The environment variable that turns the helper off (``0``).
 ENVIRONMENT = "METAIK_COMPILE_HELPER"
@@ -117,11 +118,10 @@ class _Helper:
             return
         NOTICE.start(names, where="in a helper process")
         try:
-            while jobs is not None and self.done < jobs and self.process.stdout.readline():
-                self.done += 1
-            if jobs is not None and self.done >= jobs:
+            with stop_at_once():  # a Ctrl-C ends the wait at once (the helper is then stopped)
+                code = self._wait(jobs)
+            if code is None:
                 return
-            code = self.process.wait()
         finally:
             NOTICE.end()
         self.ended = True
@@ -132,6 +132,14 @@ class _Helper:
             sys.stderr.write(f"metaik: the helper process compiling {names} failed (exit {code}): "
                              f"{' / '.join(tail)}; compiling here\n")
         self.errors.close()
+
+    def _wait(self, jobs: int | None) -> int | None:
+        """Wait for the first ``jobs`` jobs (``None``: they are done) or the helper's end (its exit code)."""
+        while jobs is not None and self.done < jobs and self.process.stdout.readline():
+            self.done += 1
+        if jobs is not None and self.done >= jobs:
+            return None
+        return self.process.wait()
 
 
 def _start(jobs: list[tuple[object, tuple]]) -> _Helper | None:

@@ -105,7 +105,7 @@ def _last_line(err: str) -> str:
 def test_ctrl_c_before_the_first_waypoint(tmp_path):
     """As the first waypoint's solve starts (its header printed just before; its 100,000 generations would take
     minutes): no waypoint done, an empty table, the CSV's header, a recording with the robot and no waypoint."""
-    run = _Run(tmp_path, "--solver", "cmaes_fast", "--iterations", "100000")
+    run = _Run(tmp_path, "--solver", "cmaes", "--iterations", "100000")  # pycma: Ctrl-C read each generation
     run.wait_for(lambda: TASK.encode() in run.out, "the run's header")
     code, out, err = run.interrupt()
     assert code == 130, (out, err)

@@ -14,6 +14,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..errors import EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, TaskError
+from ..interrupts import graceful_interrupt
 from ..fabrik.taskfile import ReachTask
 from ..placement_taskfile import PlacementTask
 from .reach import run_placement
@@ -196,9 +197,12 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
         kinds = case.problem.program.term_kinds  # the same terms at every waypoint of the case
 
         def solved(k: int, result, case=case, kinds=kinds) -> None:
-            csv_row(case.name, k, result.configuration, waypoint_errors(result, kinds))
-            if recorder:
-                recorder.log_waypoint(result.configuration)
+            with graceful_interrupt() as interrupt:  # a Ctrl-C waits for the waypoint's CSV row and recording
+                csv_row(case.name, k, result.configuration, waypoint_errors(result, kinds))
+                if recorder:
+                    recorder.log_waypoint(result.configuration)
+            if interrupt.requested:  # then stops the run, this waypoint done
+                raise KeyboardInterrupt
 
         result = track(
             task.robot, case.trajectory, case.builder,
