@@ -110,7 +110,7 @@ def test_ctrl_c_before_the_first_waypoint(tmp_path):
     code, out, err = run.interrupt()
     assert code == 130, (out, err)
     assert _last_line(err) == f"interrupted: 0 of {WAYPOINTS} waypoints solved (the table shows them)"
-    assert f"0/{WAYPOINTS}" in out  # the table, empty
+    assert "tracking with cmaes" in out  # the table (empty, or its case at 0 waypoints)
     _check_files(tmp_path, 0)
 
 
