@@ -50,7 +50,7 @@ from two_hands import pr2 as load_pr2  # noqa: E402
 import framework as fw  # noqa: E402
 from framework.costs.blocks import ROWS  # noqa: E402
 from framework.costs.kernels import TASK, residuals_at  # noqa: E402
-from framework.taskfile import load_task  # noqa: E402
+from framework.io.taskfile import load_task  # noqa: E402
 from tests.conftest import example_robot_data_dir  # noqa: E402
 
 OUT = report.ROOT / "docs" / "results" / "collisions.md"

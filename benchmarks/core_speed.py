@@ -47,11 +47,11 @@ Q_PREV = [0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.p
 def measure() -> dict:
     """Every measurement with whichever ``framework`` is importable (this checkout or the baseline)."""
     import framework
-    from framework.kinematics import PopulationKinematics  # noqa: F401  (both versions have it)
-    from framework.solve import solve
-    from framework.taskfile import load_task
+    from framework.model.kinematics import PopulationKinematics  # noqa: F401  (both versions have it)
+    from framework.solvers.solve import solve
+    from framework.io.taskfile import load_task
     from framework.tracking import TrackingTask, track
-    from framework.trajectory import paper000
+    from framework.tracking.paths import paper000
 
     root = Path(framework.__file__).resolve().parents[1]
     task = load_task(root / "tasks" / "youbot_dual_coordinated_ik.toml")

@@ -25,7 +25,7 @@ import numpy as np
 from rich.console import Console
 
 from framework.bench import doc_figures, drop_runs, grid_markdown, grid_records, plan, run_grid, write_doc
-from framework.stats import sci, sign_markdown, sign_rows, summary_rows, terms_markdown
+from framework.bench.stats import sci, sign_markdown, sign_rows, summary_rows, terms_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 TASK = ROOT / "tasks" / "paper000_all_solvers.toml"

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from framework.taskfile import load_task, resolve_task
+from framework.io.taskfile import load_task, resolve_task
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -104,12 +104,12 @@ def run_one(path: str, solver: str, cache: Path) -> str:
     """Track one path with one solver; save the per-point data to ``cache/{path}_{solver}.npz``."""
     import framework as fw
     from framework.tracking import track
-    from framework.trajectory import paper000
+    from framework.tracking.paths import paper000
 
     robot = fw.load_robot("youbot_dual_mobile")
 
     def run(trajectory):
-        return track(robot, trajectory, task(), solver=solver, seed=SEED, iterations_per_point=ITERATIONS,
+        return track(robot, trajectory, task(), solver=solver, seed=SEED, max_iterations=ITERATIONS,
                      population=POPULATION, initial=Q_PREV, priorities=solver in TASK_FIRST, progress=False)
 
     run(paper000(path)[:2])  # untimed: a process's first run loads (on a new machine, compiles) the kernels
@@ -336,7 +336,7 @@ def write_figures(runs: dict, solvers: list[str]) -> None:
     import matplotlib.pyplot as plt
 
     import framework as fw
-    from framework.trajectory import paper000
+    from framework.tracking.paths import paper000
 
     FIGURES.mkdir(parents=True, exist_ok=True)
     robot = fw.load_robot("youbot_dual_mobile")

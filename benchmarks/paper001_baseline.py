@@ -44,8 +44,8 @@ LABELS = {
 
 def run(system: str, method: str) -> tuple[str, str, dict]:
     """Track one system with one method; returns the arrays needed by the report."""
-    from framework.baselines import relative_jacobian_track
-    from framework.taskfile import load_task
+    from framework.tracking import relative_jacobian_track
+    from framework.io.taskfile import load_task
     from framework.tracking import track
 
     task = load_task(ROOT / "tasks" / f"{SYSTEMS[system]}.toml")
@@ -63,7 +63,7 @@ def run(system: str, method: str) -> tuple[str, str, dict]:
 
         def follow(trajectory):
             return track(robot, trajectory, case.builder, solver=method, seed=s.get("seed", 0),
-                         iterations_per_point=s["max_iterations"], population=s["population"], initial=case.initial,
+                         max_iterations=s["max_iterations"], population=s["population"], initial=case.initial,
                          tolerance=s["tolerance"], bounds=s["bounds"], priorities=task.priorities, progress=False)
 
     follow(case.trajectory[:2])  # untimed: a process's first run loads (on a new machine, compiles) the kernels
@@ -93,7 +93,7 @@ def run(system: str, method: str) -> tuple[str, str, dict]:
 
 def write_report(runs: dict, loads: tuple[float, float]) -> None:
     """The document from the ``runs`` (``loads``: the load average before and after them)."""
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     lines = [
         "Paper 001 compares DE with a *conventional method*: relative Jacobian with null-space task priority "
@@ -109,7 +109,7 @@ def write_report(runs: dict, loads: tuple[float, float]) -> None:
         "100 points, t_r = (0, -0.4, 0) m; start: all joints 0 (both arms straight up, near-singular).",
         "- Optimizer cost: 1.2 e_A + 1.2 e_B + 0.02 ‖q − q_prev‖ + 1e3 Σ(limit violations) (e_B = relative-position "
         "error); DE population 50, 500 iterations per point (paper 001), warm-started from the previous point.",
-        "- Baseline: `framework.baselines.relative_jacobian_track`, clipped to the joint limits, with one Jacobian "
+        "- Baseline: `framework.solvers.baselines.relative_jacobian_track`, clipped to the joint limits, with one Jacobian "
         "step per point (as a controller at the path rate) and with 20 steps per point (converged per point).",
         "",
         "Position error = e_A + e_B [m] per point. *Approach* = largest joint move from the initial configuration "
@@ -191,7 +191,7 @@ def write_figures(runs: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     FIGURES.mkdir(parents=True, exist_ok=True)
     for system, name in SYSTEMS.items():

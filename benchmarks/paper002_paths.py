@@ -80,7 +80,7 @@ PAPER_SOLVERS = SOLVERS[:7]
 
 def run_one(robot: str, path: str, solver: str, cache: Path) -> str:
     """One tracking run; ``solver`` may be ``"hybrid@s"``: the hybrid with seed ``s`` instead of :data:`SEED`."""
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
     from framework.tracking import track
 
     name, _, seed = solver.partition("@")
@@ -90,7 +90,7 @@ def run_one(robot: str, path: str, solver: str, cache: Path) -> str:
     case = task.cases[0]
 
     def run(trajectory):
-        return track(task.robot, trajectory, case.builder, solver=name, seed=seed, iterations_per_point=ITERATIONS,
+        return track(task.robot, trajectory, case.builder, solver=name, seed=seed, max_iterations=ITERATIONS,
                      population=POPULATION, initial=case.initial, options=OPTIONS.get(name),
                      priorities=task.priorities, progress=False)
 
@@ -115,9 +115,9 @@ def run_one(robot: str, path: str, solver: str, cache: Path) -> str:
 def reach_floor(robot: str, path: str, cache: Path) -> str:
     """Per pose, the smallest position error of 4 position-only hybrid solves (seeds 0-3): the reach floor [m]."""
     from framework.costs import Position
-    from framework.problem import Problem
-    from framework.solve import solve
-    from framework.taskfile import load_task
+    from framework.costs.problem import Problem
+    from framework.solvers.solve import solve
+    from framework.io.taskfile import load_task
 
     task = load_task(ROOT / "tasks" / f"paper002_{robot}_{path}.toml")
     floor = np.array(
@@ -274,7 +274,7 @@ def hybrid_seed_lines(runs: dict) -> list[str]:
 
 def sign_test_lines(runs: dict, solvers: list[str], reference: str = "de") -> list[str]:
     """Paper 002 Tables 6 and 9: the sign test of DE against each solver on the objective f, paired by pose."""
-    from framework.stats import sign_test
+    from framework.bench.stats import sign_test
 
     lines = [
         "## Sign tests (Tables 6 and 9)",
@@ -322,7 +322,7 @@ def sign_test_lines(runs: dict, solvers: list[str], reference: str = "de") -> li
 
 def _branch_note(runs: dict, reference: str) -> str:
     """`` (the youBot lemniscate: DE lower on w of N poses)`` from the runs (empty without them)."""
-    from framework.stats import sign_test
+    from framework.bench.stats import sign_test
 
     key = ("youbot", "lemniscate")
     if (*key, reference) not in runs or (*key, "hybrid") not in runs:

@@ -32,15 +32,15 @@ import shapely
 import shapely.plotting
 
 import framework as fw
-from framework.baselines.solver import BUSS
-from framework.fabrik import (
+from framework.solvers.baselines.solver import BUSS
+from framework.solvers.fabrik import (
     BaseOrientation,
     Environment,
     MFabrik,
     MobileArm,
 )
-from framework.fabrik.taskfile import ReachRun, run_reach_task
-from framework.taskfile import load_task
+from framework.io.fabrik_tasks import ReachRun, run_reach_task
+from framework.io.taskfile import load_task
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -90,7 +90,7 @@ class Scenario:
     targets: np.ndarray
     start: np.ndarray
     orientation: BaseOrientation
-    task: object  # the reach task file (framework.fabrik.taskfile.ReachTask)
+    task: object  # the reach task file (framework.io.fabrik_tasks.ReachTask)
 
 
 def scenarios(robot: fw.Robot) -> list[Scenario]:
@@ -494,7 +494,7 @@ NOTES = [
     (
         "- **Chain.** FABRIK runs in the arm's plane: joint 1 (vertical) turns the plane towards the target, joints "
         "2-4 are planar in it, joint 5 (wrist roll) does not move the position and keeps its value. The structure, "
-        "link lengths and offsets are read from the Pinocchio model (`framework.fabrik.PlanarChain`)."
+        "link lengths and offsets are read from the Pinocchio model (`framework.solvers.fabrik.PlanarChain`)."
     ),
     (
         "- **ProjectPoint.** The arm is mounted 0.15 m ahead of the base centre and the shoulder 0.287 m above the "

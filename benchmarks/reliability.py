@@ -41,7 +41,7 @@ import report  # noqa: E402
 import framework as fw  # noqa: E402
 from framework.cli import EXIT_INPUT, EXIT_INTERRUPTED, main as cli  # noqa: E402
 from framework.errors import MetaikError, RobotFileError  # noqa: E402
-from framework.recording import read_recording  # noqa: E402
+from framework.io.recording import read_recording  # noqa: E402
 from tests.fuzz.bad_inputs import API_CASES, CLI_CASES  # noqa: E402
 from tests.fuzz.escapes import ARM, ESCAPES  # noqa: E402
 from tests.fuzz.references import fk_difference, jacobian_difference, reach_reachable_pose  # noqa: E402

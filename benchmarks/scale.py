@@ -22,8 +22,8 @@ import report  # noqa: E402
 
 import framework as fw  # noqa: E402
 from framework.bench import plan, run_grid  # noqa: E402
-from framework.reachability import reachability_map  # noqa: E402
-from framework.taskfile import resolve_task  # noqa: E402
+from framework.reach.capability import reachability_map  # noqa: E402
+from framework.io.taskfile import resolve_task  # noqa: E402
 
 OUT = report.ROOT / "docs" / "results" / "scale.md"
 REPEATS = 2

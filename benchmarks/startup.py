@@ -62,7 +62,7 @@ def timed(*args, **kwargs):
     return result
 framework.solve = timed
 exec(compile(sys.argv[2], "README.md", "exec"), {})
-from framework.compile_cache import NOTICE
+from framework.compiled.cache import NOTICE
 print(json.dumps({"import": imported, "first_solve": solves[0], "compiling": NOTICE.seconds,
                   "process": time.perf_counter() - started}))
 """
@@ -80,7 +80,7 @@ t = time.perf_counter()
 result = fw.solve(fw.Problem(robot, fw.Pose("tool0", target)))
 first = time.perf_counter() - t
 assert result.success
-from framework.compile_cache import NOTICE
+from framework.compiled.cache import NOTICE
 print(json.dumps({"import": imported, "first_solve": first, "compiling": NOTICE.seconds,
                   "process": time.perf_counter() - started}))
 """
@@ -337,7 +337,7 @@ def worker(root: str, inputs: str) -> None:
     import pinocchio as pin
 
     import framework as fw
-    from framework.tracking import TrackingTask, track
+    from framework.tracking import TrackingTask, paths, track
     from tests.conftest import example_robot_data_dir
 
     data = np.load(inputs)
@@ -348,7 +348,7 @@ def worker(root: str, inputs: str) -> None:
     q_prev = np.array(Q_PREV)
     task = TrackingTask(frame="arm1_ee", follower="arm2_ee", offset=(0, -0.3, 0), position_weight=1.2,
                         motion={"base": 0.1, "arm1": 0.4, "arm2": 0.4})
-    path = fw.trajectory.paper000("sinusoidal")
+    path = paths.paper000("sinusoidal")
 
     def strict(robot, tip, q, target) -> bool:
         error = robot.frame_placement(q, tip).inverse() * pin.SE3(target)

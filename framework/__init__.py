@@ -1,11 +1,11 @@
 """metaik: inverse kinematics by optimization for any robot described by URDF/xacro.
 
-The data flow follows the package layout: robot model (:mod:`~framework.robot`, :mod:`~framework.loading`,
-:mod:`~framework.compose`) → population kinematics (:mod:`~framework.kinematics`) → cost terms → solvers →
+The data flow follows the package layout: robot model (:mod:`~framework.model.robot`, :mod:`~framework.model.loading`,
+:mod:`~framework.model.compose`) → population kinematics (:mod:`~framework.model.kinematics`) → cost terms → solvers →
 tracking → results and recordings.
 """
 
-from .compose import Mount, mount, mount_urdf, planar_base_urdf
+from .model.compose import Mount, mount, mount_urdf, planar_base_urdf
 from .costs import (CenterOfMass, SelfCollision, Obstacles, Cone, Direction, Distance, JointLimitPenalty, JointTarget, LookAt, Motion, Objective, Orientation, PointOnLine, PointOnPlane, Pose, Position,
                     RelativePose, RelativePosition, Term)
 from .errors import (
@@ -21,17 +21,16 @@ from .errors import (
     UnknownRobotError,
     UnsupportedJointError,
 )
-from .kinematics import FramePoses
-from .loading import load_robot, robot_from_urdf, robot_index
-from .problem import Evaluation, Problem
-from .robot import Joint, JointKind, Robot
-from .solve import IKResult, solve
-from .batch import BatchResult, solve_batch
-from .collision import CollisionReport, Contact, RobotShape
-from .scene import Box, Capsule, Mesh, Plane, Scene, Sphere
+from .model.kinematics import FramePoses
+from .model.loading import load_robot, robot_from_urdf, robot_index
+from .costs.problem import Evaluation, Problem
+from .model.joints import Joint, JointKind
+from .model.robot import Robot
+from .solvers.solve import IKResult, solve
+from .solvers.batch import BatchResult, solve_batch
+from .geometry.collision import CollisionReport, Contact, RobotShape
+from .geometry.scene import Box, Capsule, Mesh, Plane, Scene, Sphere
 from .solvers import solver_names
-from .fabrik import solver as _mfabrik_solver  # noqa: F401  registers "mfabrik" (paper 003) with the solvers
-from .baselines import solver as _jacobian_solvers  # noqa: F401  registers "pinv" and "dls" (papers 001, 003)
 
 __version__ = "0.1.0"
 

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import TaskError
+from .errors import SolverError, TaskError
 
 #: Arrays up to this many entries are tested for NaN and inf in Python: ``np.isfinite(a).all()`` costs ~1 µs of
 #: dispatch, more than the test itself on a configuration or a target.
@@ -70,3 +70,27 @@ def check_table(values: Mapping[str, Any], schema: Mapping[str, str], where: str
             ok = all(isinstance(v, str) for v in value)
         if not ok:
             raise TaskError(f"{where} {key} must be {said}; got {value!r}")
+
+
+def positive_int(value: Any, what: str, *, minimum: int = 1, maximum: int | None = None) -> int:
+    """``value`` as an int in ``[minimum, maximum]``; raises :class:`SolverError` naming ``what``."""
+    if type(value) is int and value >= minimum and (maximum is None or value <= maximum):  # the common case
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
+            or not np.isfinite(value) or value != int(value) or int(value) < minimum:
+        raise SolverError(f"{what} must be an integer >= {minimum}; got {value!r}")
+    if maximum is not None and int(value) > maximum:
+        raise SolverError(f"{what} must be at most {maximum:,}; got {int(value):,}")
+    return int(value)
+
+
+def suggest(name: object, known: Sequence[str]) -> str:
+    """``"; did you mean ..."`` (up to three close names) or ``"; known: ..."`` (up to twelve), for an error
+    naming ``name`` that is not among ``known``."""
+    import difflib
+
+    close = difflib.get_close_matches(str(name), list(known), n=3)
+    if close:
+        return f"; did you mean {', '.join(map(repr, close))}?"
+    shown = ", ".join(map(repr, list(known)[:12]))
+    return f"; known: {shown}{', ...' if len(known) > 12 else ''}"

@@ -1,4 +1,4 @@
-"""Compiled trampolines for the tests: the package's compiled-only functions (``framework.native.internal``: linked
+"""Compiled trampolines for the tests: the package's compiled-only functions (``framework.compiled.native.internal``: linked
 into their callers, no Python entry point) called from Python through a function compiled here, and the engine's
 workspaces made and read from Python."""
 
@@ -10,7 +10,7 @@ import numpy as np
 from framework.costs.kernels import linearize
 from framework.costs.workspace import views, workspaces
 from framework.engine.derivatives import add_curvature
-from framework.native import keep_alive
+from framework.compiled.native import keep_alive
 
 
 def python_callable(function):

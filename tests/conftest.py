@@ -34,7 +34,7 @@ def rng() -> np.random.Generator:
 
 def without_compile_notices(err: str) -> str:
     """``err`` without the lines saying the package's code compiles (a cold cache's first use; see
-    :class:`framework.compile_cache.CompileNotice`)."""
+    :class:`framework.compiled.cache.CompileNotice`)."""
     return "".join(line for line in err.splitlines(keepends=True) if not line.startswith("metaik: compiling "))
 
 
@@ -53,7 +53,7 @@ def sphere_arm():
     """``(robot, shape, exact cover)`` of the two-joint arm of ``tests/test_collision.py`` whose base and forearm
     are spheres: the cover is the geometry itself, so sphere terms and coal agree (the collision tests use it)."""
     import framework as fw
-    from framework.spheres import SphereCover
+    from framework.geometry.spheres import SphereCover
     from tests.test_collision import SPHERES, L, R
 
     robot = fw.robot_from_urdf(SPHERES)

@@ -6,15 +6,11 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework import trajectory as tr
-from framework.baselines import (
-    dls_inverse,
-    jacobian_track,
-    relative_jacobian_step,
-    relative_jacobian_track,
-    svd_pinv,
-)
-from framework.baselines.jacobian import position_and_jacobian
+from framework.tracking import paths
+from framework.tracking import trajectory as tr
+from framework.solvers.baselines import dls_inverse, relative_jacobian_step, svd_pinv
+from framework.tracking import jacobian_track, relative_jacobian_track
+from framework.solvers.baselines.jacobian import position_and_jacobian
 from framework.tracking import TrackingTask, track
 
 
@@ -63,7 +59,7 @@ def stretched_arm_and_path(arm):
     U, s, _ = np.linalg.svd(J)
     assert s[-1] < 1e-12  # constructed to be singular: no velocity along the arm
     along = U[:, -1] if U[:, -1] @ p > 0 else -U[:, -1]
-    path = tr.line(p, p - 0.02 * along, 21)  # inward, 1 mm per waypoint
+    path = paths.line(p, p - 0.02 * along, 21)  # inward, 1 mm per waypoint
     return x_singular + np.array([0.0, 0.0, 1e-4, 0.0, 0.0]), path
 
 
@@ -98,7 +94,7 @@ def test_relative_jacobian_priority_and_tracking():
     assert np.linalg.norm(offset - (P1[1] - P1[0])) == pytest.approx(0.7 * 0.01, rel=0.05)
     assert np.linalg.norm(target - P1[0]) == pytest.approx(0.3 * 0.01, rel=0.05)
 
-    path = tr.circle(P[0] + [0.0, 0.02, 0.0], 0.02, 12, start_angle=np.pi)
+    path = paths.circle(P[0] + [0.0, 0.02, 0.0], 0.02, 12, start_angle=np.pi)
     result = relative_jacobian_track(
         robot, path, "arm1_ee", "arm2_ee", P[1] - P[0], initial=x0, iterations_per_point=60, tolerance=1e-10
     )
@@ -109,7 +105,7 @@ def test_relative_jacobian_priority_and_tracking():
 
 
 def test_bad_input(arm):
-    path = tr.line((0.3, 0.0, 0.3), (0.3, 0.01, 0.3), 3)
+    path = paths.line((0.3, 0.0, 0.3), (0.3, 0.01, 0.3), 3)
     with pytest.raises(fw.TaskError, match="method"):
         jacobian_track(arm, path, method="transpose")
     with pytest.raises(fw.ConfigurationError):

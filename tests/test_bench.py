@@ -27,7 +27,7 @@ from framework.bench import (
 from framework.cli.bench import add_bench_command
 from framework.errors import TaskError
 from framework.resources import data_dir
-from framework.stats import sign_rows, summary_rows
+from framework.bench.stats import sign_rows, summary_rows
 from tests.conftest import same_framework_env
 from tests.processes import alive, children
 

@@ -10,8 +10,8 @@ import pinocchio as pin
 import pytest
 
 import framework as fw
-from framework.broad_phase import bounding_sphere, bounding_spheres
-from framework.spheres import mesh_surface_points, surface_points
+from framework.geometry.broad_phase import bounding_sphere, bounding_spheres
+from framework.geometry.spheres import mesh_surface_points, surface_points
 
 PR2_JOINTS = ["torso_lift_joint", "l_shoulder_pan_joint", "l_shoulder_lift_joint", "l_elbow_flex_joint",
               "r_shoulder_pan_joint", "r_shoulder_lift_joint", "r_elbow_flex_joint"]

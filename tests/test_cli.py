@@ -8,7 +8,7 @@ import pytest
 import framework as fw
 from framework.cli import EXIT_INPUT, EXIT_MISSED, EXIT_OK, main
 from framework.resources import data_dir
-from framework.taskfile import evaluate, load_task
+from framework.io.taskfile import evaluate, load_task
 
 TASK = data_dir("tasks") / "youbot_dual_coordinated_ik.toml"
 
@@ -64,7 +64,8 @@ def test_a_command_that_compiled_says_how_long_and_one_that_loaded_does_not(monk
     """A command during which compiling took time (a fresh install's first solves) says how much of its times it
     was, on stderr; one that only loaded cached code says nothing of it (each compile also says so as it begins:
     tests/test_compile_cache.py)."""
-    from framework import cli, compile_cache
+    from framework import cli
+    from framework.compiled import cache as compile_cache
 
     def compiling_run(args, console):
         compile_cache.NOTICE.seconds += 12.0
@@ -133,7 +134,7 @@ def test_help_everywhere(capsys):
 
 
 def test_run_record_writes_what_the_table_shows(tmp_path, capsys):
-    from framework.recording import read_recording
+    from framework.io.recording import read_recording
 
     path = tmp_path / "run.rrd"
     argv = ["run", str(TASK), "--solver", "hybrid", "--case", "target 1", "--case", "target 3", "--record", str(path)]

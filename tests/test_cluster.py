@@ -18,7 +18,7 @@ import pytest
 
 import framework as fw
 from framework.bench import plan, read_results, run_grid
-from framework.cluster import ClusterError, cluster_client
+from framework.solvers.cluster import ClusterError, cluster_client
 
 from tests.test_bench import SMALL
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework.collision import RobotShape
+from framework.geometry.collision import RobotShape
 from framework.errors import RobotFileError
 
 R, L = 0.1, 0.3

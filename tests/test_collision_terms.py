@@ -135,7 +135,7 @@ def test_contact_rows_cost_nothing_where_the_descent_stays_clear(rng):
     from random starts: the dual youBot's arms are close), the engine goes on and ends with every row within
     tolerance. A trivial method — the answer without the term — is in contact there."""
     from framework.engine import LocalSettings, solve_local
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
     robot = task.robot
@@ -256,7 +256,7 @@ def test_jacobians_of_the_frames_a_call_needs_equal_every_frames(rng):
     at random configurations (most of them in contact) and at configurations clear of contact."""
     from framework.costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES
     from framework.engine.tables import without_contacts
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
     from tests.compiled import linearize_in, make_workspaces, python_callable, rows_in, use_table
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
@@ -295,7 +295,7 @@ def test_restoring_steps_see_the_rows_in_contact_as_the_kernel_stacks_them(rng):
     from framework.costs.kernels import COMPUTE, TASK, YES
     from framework.costs.workspace import views
     from framework.engine.tables import set_aside_clear
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
     from tests.compiled import linearize_in, make_workspaces, rows_in, use_table
 
     @numba.njit
@@ -380,7 +380,7 @@ def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
     from tests.compiled import python_callable
 
     widen_margins = python_callable(widen_margins)
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     task = load_task(Path(fw.__file__).resolve().parents[1] / "tasks" / "youbot_dual_coordinated_ik.toml")
     robot = task.robot

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numba
 
-from framework import compile_cache
+from framework.compiled import cache as compile_cache
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -57,7 +57,7 @@ import sys
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 from framework.engine import draws
-from framework.compile_cache import is_cached
+from framework.compiled.cache import is_cached
 cached = is_cached(draws.draws)
 draws.draws(draws.stream(1), np.zeros(2), np.ones(2), 3)
 print(cached, draws.draws.stats.cache_hits and 1 or 0, draws.__file__)

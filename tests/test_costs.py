@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 import framework as fw
 from framework.costs import JointLimitPenalty, Motion, Orientation, Position, Program, RelativePosition
 from framework.engine import objective_derivatives_at, residuals
-from framework.problem import Problem
+from framework.costs.problem import Problem
 
 
 @pytest.fixture(scope="module")

@@ -17,8 +17,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from framework import dh
-from framework.dh import DHJoint, dh_chain, dh_transform
+from framework.model import dh
+from framework.model.dh import DHJoint, dh_chain, dh_transform
 from framework.errors import LimitsError, MetaikError
 
 if sys.version_info >= (3, 11):
@@ -278,7 +278,7 @@ def test_committed_urdfs_equal_generated():
     generated = dh.build_urdfs(ROBOTS / "dh_tables.toml")
     assert set(generated) == {entry["file"] for entry in INDEX.values()}
     for file, text in generated.items():
-        assert (ROBOTS / file).read_text() == text, f"robots/{file} is stale: run `python -m framework.dh`"
+        assert (ROBOTS / file).read_text() == text, f"robots/{file} is stale: run `python -m framework.model.dh`"
     assert dh.main(["--check"]) == 0
 
 

@@ -11,7 +11,7 @@ import scipy.optimize as so
 
 import framework as fw
 from framework.engine import LocalSettings, residuals, solve_local
-from framework.problem import Problem
+from framework.costs.problem import Problem
 
 
 def pose_errors(robot: fw.Robot, x: np.ndarray, frame: str, target: pin.SE3) -> tuple[float, float]:

@@ -7,8 +7,8 @@ import pytest
 
 import framework as fw
 from framework.errors import TaskError
-from framework.fabrik import Fabrik, PlanarChain
-from framework.fabrik.progress import Progress
+from framework.solvers.fabrik import Fabrik, PlanarChain
+from framework.solvers.fabrik.progress import Progress
 from tests.test_fabrik_chain import PLANAR_3R
 
 

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import framework as fw
-from framework.fabrik import PlanarChain, UnsupportedChainError
+from framework.solvers.fabrik import PlanarChain, UnsupportedChainError
 
 #: A planar 3R arm (axes along y, motion in the xz-plane) with an offset shoulder and a tool frame: 0.4, 0.3, 0.2 m.
 PLANAR_3R = """<?xml version="1.0"?>

@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import framework as fw
-from framework.fabrik import (
+from framework.solvers.fabrik import (
     BaseOrientation,
     BaseReach,
     Circle,
@@ -23,7 +23,7 @@ from framework.fabrik import (
     UnsupportedBaseError,
     UnsupportedChainError,
 )
-from framework.fabrik.regions import AnnulusInBox
+from framework.solvers.fabrik.regions import AnnulusInBox
 
 
 @pytest.fixture(scope="module")

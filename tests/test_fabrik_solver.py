@@ -10,8 +10,8 @@ import pytest
 
 import framework as fw
 from framework.errors import SolverError
-from framework.fabrik import Fabrik, MFabrik, PlanarChain
-from framework.trajectory import Trajectory
+from framework.solvers.fabrik import Fabrik, MFabrik, PlanarChain
+from framework.tracking.trajectory import Trajectory
 
 
 def _targets(robot: fw.Robot, frame: str, count: int, seed: int) -> np.ndarray:

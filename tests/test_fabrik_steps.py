@@ -13,11 +13,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import framework as fw
-from framework.fabrik import Circle, Environment, MFabrik, MobileArm, Polygon, Rectangle
-from framework.fabrik.steps import intermediate_configurations, shortest_free_path
-from framework.fabrik.steps import algorithm2
+from framework.solvers.fabrik import Circle, Environment, MFabrik, MobileArm, Polygon, Rectangle
+from framework.solvers.fabrik.steps import intermediate_configurations, shortest_free_path
+from framework.solvers.fabrik.steps import algorithm2
 from framework.tracking import TrackingTask, track
-from framework.trajectory import Trajectory
+from framework.tracking.trajectory import Trajectory
 
 BOX = ((-1.5, 1.5), (-1.5, 1.5))
 
@@ -127,7 +127,7 @@ def test_tracking_a_path_past_an_obstacle(robot, arm):
     targets = np.column_stack([0.1 * np.sin(2 * np.pi * ys), ys, np.full_like(ys, 0.3)])
     x0 = configuration_at(robot, (-0.2, -1.3))
     tracking = track(robot, Trajectory.from_array(targets), TrackingTask(frame="arm_ee", motion={}), solver="mfabrik",
-                     initial=x0, tolerance=1e-3, iterations_per_point=1000, options={"environment": env},
+                     initial=x0, tolerance=1e-3, max_iterations=1000, options={"environment": env},
                      progress=False)
     assert tracking.success.all()
     reached = robot.frame_poses(tracking.configurations, "arm_ee").positions[:, 0]  # Pinocchio FK

@@ -123,7 +123,7 @@ def test_direction_matches_pinocchio_orientation_error_on_a_real_arm(erd, rng):
 
 
 def test_new_terms_in_a_task_file(tmp_path):
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     path = tmp_path / "point.toml"
     path.write_text("""
@@ -264,7 +264,7 @@ def test_relative_pose_against_pinocchio_differences_and_a_two_hand_grasp(robot,
 
 
 def test_relative_pose_in_a_task_file(tmp_path):
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     path = tmp_path / "hold.toml"
     path.write_text("""

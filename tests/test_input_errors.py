@@ -51,7 +51,7 @@ def test_task_file_mistakes_name_the_table_and_key(tmp_path, capsys, extra, mess
     path = tmp_path / "t.toml"
     text = TASK.replace("EXTRA", extra) if extra.startswith("joint") else TASK.replace("EXTRA", "") + extra
     path.write_text(text)
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     with pytest.raises(TaskError, match=message):
         load_task(path)
@@ -61,7 +61,7 @@ def test_task_file_mistakes_name_the_table_and_key(tmp_path, capsys, extra, mess
 
 
 def test_task_files_take_groups(tmp_path):
-    from framework.taskfile import load_task
+    from framework.io.taskfile import load_task
 
     path = tmp_path / "t.toml"
     path.write_text(TASK.replace("EXTRA", 'groups = { wrist = ["joint4", "joint5"] }'))
@@ -75,7 +75,7 @@ def test_ctrl_c_in_a_multi_case_run_stops_it_and_is_never_success(tmp_path):
     import sys
     import time
 
-    from framework.taskfile import load_task, resolve_task
+    from framework.io.taskfile import load_task, resolve_task
 
     case = load_task(resolve_task("youbot_dual_coordinated_ik")).cases[0]
     fw.solve(case.problem, "cmaes", max_iterations=2)  # compiles what the run needs (numba's cache is shared)

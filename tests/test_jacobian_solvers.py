@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework.baselines.jacobian import dls_inverse, svd_pinv
-from framework.baselines.solver import BUSS
+from framework.solvers.baselines.jacobian import dls_inverse, svd_pinv
+from framework.solvers.baselines.solver import BUSS
 from framework.engine import residuals
 
 

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import framework as fw
-from framework.robot import JointKind
+from framework.model.joints import JointKind
 
 
 def pinocchio_poses(robot: fw.Robot, X: np.ndarray, frames: list[str]) -> tuple[np.ndarray, np.ndarray]:

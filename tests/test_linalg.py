@@ -164,7 +164,7 @@ def test_taken_views_are_the_buffers_entries_and_the_tangent_scratch_tiles_its_s
     import numba
 
     from framework.engine.tangent import tangent_scratch
-    from framework.native import take
+    from framework.compiled.native import take
 
     @numba.njit
     def fill(buffer, start, rows, cols):

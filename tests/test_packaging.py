@@ -22,4 +22,4 @@ def test_wheel_ships_robots_and_tasks(tmp_path):
             assert f"framework/_data/robots/{path.relative_to(ROOT / 'robots').as_posix()}" in names
     for path in (ROOT / "tasks").glob("*.toml"):
         assert f"framework/_data/tasks/{path.name}" in names
-    assert "framework/kinematics.py" in names
+    assert "framework/model/kinematics.py" in names

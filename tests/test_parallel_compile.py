@@ -16,9 +16,9 @@ ROOT = Path(__file__).resolve().parents[1]
 _PROBE = """
 import json, sys
 import numpy as np
-from framework.solvers import base, cmaes_fast
-from framework.compile_cache import has_signature
-from framework.parallel_compile import entry_points
+from framework.optimizers import base, cmaes_fast
+from framework.compiled.cache import has_signature
+from framework.compiled.parallel import entry_points
 if sys.argv[1] == "failing":
     sys.executable = "/bin/false"  # a helper that exits with an error at once
 rng = np.random.default_rng(3)
@@ -59,11 +59,11 @@ def test_without_a_helper_everything_compiles_here(tmp_path):
 def test_a_failing_helper_is_reported_and_its_jobs_compile_here(tmp_path):
     result, errors = _probe(tmp_path, "failing")
     assert result == {"misses": [1, 1], "hits": [0, 0], "cached": [True, True], "same": [True, True]}, errors
-    assert "the helper process compiling solvers.cmaes_fast._sample failed (exit 1)" in errors
+    assert "the helper process compiling optimizers.cmaes_fast._sample failed (exit 1)" in errors
 
 
 _MODULE = '''
-from framework.native import compiled, internal
+from framework.compiled.native import compiled, internal
 
 @internal
 def inner(a, b):
@@ -85,7 +85,7 @@ _CALLEES = """
 import json, sys
 import numpy as np
 import callees_probe as m
-from framework.parallel_compile import entry_points
+from framework.compiled.parallel import entry_points
 a, b = np.arange(4.0), np.linspace(0, 1, 4)
 (point,) = entry_points([(m.outer, (a, b))], [(m.inner, (a, b)), (m.other, (a,))])
 stats = lambda f: [sum(f.dispatcher.stats.cache_misses.values()), sum(f.dispatcher.stats.cache_hits.values())]

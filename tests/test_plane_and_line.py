@@ -10,7 +10,7 @@ import framework as fw
 from framework.costs import Program
 from framework.engine import residuals
 from framework.errors import TaskError
-from framework.taskfile import task_from_dict
+from framework.io.taskfile import task_from_dict
 
 from tests.test_costs import _curvature
 

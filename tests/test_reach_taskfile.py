@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from framework.cli import EXIT_INPUT, EXIT_OK, main
-from framework.fabrik import BaseOrientation
-from framework.fabrik.taskfile import ReachTask, run_reach_task
+from framework.solvers.fabrik import BaseOrientation
+from framework.io.fabrik_tasks import ReachTask, run_reach_task
 from framework.resources import data_dir
-from framework.taskfile import load_task
+from framework.io.taskfile import load_task
 
 TASKS = data_dir("tasks")
 SCENARIOS = ("square", "corridor", "l_shape")
@@ -56,7 +56,7 @@ def test_random_targets_and_baselines_through_the_command_line(capsys):
 
 
 def test_reach_run_records_the_path(tmp_path, capsys):
-    from framework.recording import read_recording
+    from framework.io.recording import read_recording
 
     path = tmp_path / "reach.rrd"
     assert main(["run", "paper003_sinusoid", "--record", str(path)]) == EXIT_OK
@@ -113,8 +113,8 @@ def test_the_base_file_itself_runs(tmp_path, capsys):
 
 
 def test_every_shipped_task_file_loads():
-    from framework.placement_taskfile import PlacementTask
-    from framework.taskfile import TaskFile
+    from framework.io.placement import PlacementTask
+    from framework.io.taskfile import TaskFile
 
     paths = sorted(TASKS.glob("*.toml"))
     assert len(paths) >= 23

@@ -8,7 +8,8 @@ import pytest
 
 import framework as fw
 from framework.errors import ConfigurationError, TaskError
-from framework.reachability import (MAP_TOLERANCE, ReachabilityMap, base_placements, manipulability,
+from framework.solvers.settings import MAPS
+from framework.reach.capability import (ReachabilityMap, base_placements, manipulability,
                                     reachability_map, sample_rotations)
 
 
@@ -40,17 +41,17 @@ def test_position_map_against_dense_fk_sampling(arm, position_map):
     # a centre 5 mm from a sample may still lie just outside the workspace: each one the map misses is missed
     # by a thorough solve too (the hybrid, 20x the map's iterations, then its global phase)
     for c in m.centers[reachable & ~m.reached[:, 0]]:
-        thorough = fw.solve(fw.Problem(arm, fw.Position("ee", c)), tolerance=MAP_TOLERANCE, max_iterations=6000)
+        thorough = fw.solve(fw.Problem(arm, fw.Position("ee", c)), tolerance=MAPS.tolerance, max_iterations=6000)
         assert not thorough.success, c
 
 
 def test_map_solutions_hold_by_fk_and_manipulability_by_pinocchio(arm):
     m = reachability_map(arm, "ee", voxel=0.2, box=([-0.4, -0.4, 0.0], [0.4, 0.4, 0.4]))
     problem = fw.Problem(arm, fw.Position("ee", m.centers[0]))
-    batch = fw.solve_batch(problem, m.centers, "multistart_lm", tolerance=MAP_TOLERANCE, max_iterations=300)
+    batch = fw.solve_batch(problem, m.centers, "multistart_lm", tolerance=MAPS.tolerance, max_iterations=300)
     np.testing.assert_array_equal(batch.success, m.reached[:, 0])
     for x, c in zip(batch.configurations[batch.success], m.centers[batch.success]):
-        assert np.linalg.norm(arm.frame_placement(x, "ee").translation - c) <= MAP_TOLERANCE
+        assert np.linalg.norm(arm.frame_placement(x, "ee").translation - c) <= MAPS.tolerance
     x = batch.configurations[batch.success][0]
     data = arm.model.createData()
     J = pin.computeFrameJacobian(arm.model, data, arm.to_pinocchio(x[None])[0], arm.model.getFrameId("ee"),
@@ -83,7 +84,7 @@ def test_base_placement_against_pinned_base_solves():
         x = placements.configurations[k]
         np.testing.assert_allclose(x[placements.base], placements.candidates[k])
         for frame, target in targets.items():
-            assert np.linalg.norm(robot.frame_placement(x, frame).translation - target) <= MAP_TOLERANCE
+            assert np.linalg.norm(robot.frame_placement(x, frame).translation - target) <= MAPS.tolerance
     # brute force: the whole robot with its base pinned at each candidate, world targets, no transform, a
     # thorough solve (the hybrid: 5000 iterations, then its global phase)
     agree = 0
@@ -92,7 +93,7 @@ def test_base_placement_against_pinned_base_solves():
                                     "base_theta": (theta - 1e-12, theta + 1e-12)})
         problem = fw.Problem(pinned, fw.Position("arm1_ee", targets["arm1_ee"])
                              + fw.Position("arm2_ee", targets["arm2_ee"]))
-        result = fw.solve(problem, seed=k, tolerance=MAP_TOLERANCE, max_iterations=5000)
+        result = fw.solve(problem, seed=k, tolerance=MAPS.tolerance, max_iterations=5000)
         agree += result.success == placements.reached[k]
     share = placements.reached.mean()
     assert agree / len(placements.candidates) >= 0.95 > max(share, 1 - share)  # beats a constant answer
@@ -130,9 +131,9 @@ def test_reach_command(tmp_path, capsys):
 
 def test_placement_task_file_runs_and_records(tmp_path, capsys):
     from framework.cli import EXIT_INPUT, EXIT_OK, main
-    from framework.placement_taskfile import PlacementTask
-    from framework.recording import read_recording
-    from framework.taskfile import load_task, resolve_task
+    from framework.io.placement import PlacementTask
+    from framework.io.recording import read_recording
+    from framework.io.taskfile import load_task, resolve_task
 
     task = load_task(resolve_task("youbot_dual_base_placement"))
     assert isinstance(task, PlacementTask) and set(task.targets) == {"arm1_ee", "arm2_ee"}

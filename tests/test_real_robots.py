@@ -73,7 +73,7 @@ def test_default_end_effectors_are_the_tools_of_the_solved_chains(erd, name, exp
                                   "talos_data/robots/talos_reduced.urdf",
                                   "alexander_description/urdf/alexander_v1.lowerBodyOnly.urdf"])
 def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
-    from framework.loading import SENSOR_NAMES
+    from framework.model.loading import SENSOR_NAMES
 
     robot = fw.load_robot(erd / path)
     assert robot.end_effectors and not [f for f in robot.end_effectors if SENSOR_NAMES.search(f)]

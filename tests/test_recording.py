@@ -12,8 +12,8 @@ import pytest
 
 import framework as fw
 from framework.costs import Motion, Position
-from framework.problem import Problem
-from framework.recording import (
+from framework.costs.problem import Problem
+from framework.io.recording import (
     Recorder,
     RecordingError,
     entity_name,
@@ -24,10 +24,10 @@ from framework.recording import (
     replay_command_line,
 )
 from framework.cli.replay import add_replay_command, replay_command
-from framework.solve import solve
+from framework.solvers.solve import solve
 from framework.solvers import minimize
-from framework.taskfile import load_task
-from framework.drawing import resolve_mesh
+from framework.io.taskfile import load_task
+from framework.viz.drawing import resolve_mesh
 
 TASK = "tasks/youbot_dual_coordinated_ik.toml"
 
@@ -120,7 +120,7 @@ def test_recorded_pose_matches_pinocchio(solved, run_file):
 
 def test_tracking_recording_matches_the_tracker(tmp_path):
     from framework.tracking import TrackingTask, track
-    from framework.trajectory import paper000
+    from framework.tracking.paths import paper000
 
     robot = fw.load_robot("youbot_dual_mobile")
     task = TrackingTask(
@@ -222,7 +222,7 @@ def test_crash_leaves_a_readable_file(tmp_path):
         import os, signal
         import numpy as np
         import framework as fw
-        from framework.recording import Recorder
+        from framework.io.recording import Recorder
         robot = fw.load_robot("youbot_arm")
         recorder = Recorder({str(path)!r}, robot)
         recorder.log_path(np.tile(robot.middle, (4, 1)), errors={{"e": np.arange(4.0)}}, name="done")
@@ -341,7 +341,7 @@ def test_a_torn_recording_reads_up_to_its_last_complete_message(run_file, tmp_pa
     """A file cut anywhere (a writer killed mid-write) reads back as a prefix of the whole recording: the
     solutions it holds are the first ones of the whole file, more of them the later the cut, and it says where
     it stops; replay opens the intact part."""
-    from framework.recording import intact_messages, repair_recording
+    from framework.io.recording import intact_messages, repair_recording
 
     data = run_file.read_bytes()
     whole = read_recording(run_file)
@@ -375,7 +375,7 @@ def test_a_torn_recording_reads_up_to_its_last_complete_message(run_file, tmp_pa
 def test_recordings_a_stopped_run_leaves_read_back(solved, tmp_path):
     """An empty file says it is empty (one error naming it); a path logged with no waypoint (a run stopped before
     its first) reads back with the robot and no waypoint, and its summary says so."""
-    from framework.recording import Recorder
+    from framework.io.recording import Recorder
 
     empty = tmp_path / "empty.rrd"
     empty.write_bytes(b"")

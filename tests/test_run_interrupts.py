@@ -19,7 +19,7 @@ TASK = "paper000_circular"
 
 
 def _waypoints() -> int:
-    from framework.taskfile import load_task, resolve_task
+    from framework.io.taskfile import load_task, resolve_task
 
     return load_task(resolve_task(TASK)).cases[0].trajectory.K
 
@@ -82,7 +82,7 @@ class _Run:
 def _check_files(folder: Path, solved: int) -> None:
     """The CSV holds its header and ``solved`` rows; the recording reads back (robot, ``solved`` waypoints) and
     ``metaik replay --summary`` reads it."""
-    from framework.recording import read_recording
+    from framework.io.recording import read_recording
 
     lines = (folder / "r.csv").read_text().splitlines()
     assert lines[0].startswith("case,k,") and len(lines) == 1 + solved

@@ -12,15 +12,15 @@ import pytest
 
 import framework as fw
 from framework.costs import Program
-from framework.solids import solid_distance
+from framework.geometry.solids import solid_distance
 from tests.compiled import curvature_at, linearize_in, make_workspaces, python_callable, rows_in, \
     set_jacobian_rows
 
 solid_distance = python_callable(solid_distance)
 from framework.engine import residuals
 from framework.errors import TaskError
-from framework.spheres import SphereCover
-from framework.taskfile import load_task, resolve_task
+from framework.geometry.spheres import SphereCover
+from framework.io.taskfile import load_task, resolve_task
 from tests.test_collision import SPHERES, L, R
 
 TURNED = pin.rpy.rpyToMatrix(0.3, -0.5, 1.1)
@@ -55,7 +55,7 @@ def _coal_distance(obstacle, point) -> float:
 def test_signed_distances_equal_coal_outside_and_the_depth_inside(obstacle, rng):
     """Outside: coal's exact distance. Inside: minus the depth, brute-forced as the distance to the nearest of
     many surface samples (so a kernel returning 0 inside, or the outside formula, fails)."""
-    from framework.spheres import surface_points
+    from framework.geometry.spheres import surface_points
 
     points = rng.uniform(-0.8, 0.8, size=(300, 3))
     outside = inside = 0
@@ -235,7 +235,7 @@ def test_mesh_obstacle_is_covered_and_checked_exactly(tmp_path, sphere_arm):
     forearm sphere inside it."""
     import trimesh
 
-    from framework.spheres import surface_points
+    from framework.geometry.spheres import surface_points
 
     path = tmp_path / "block.stl"
     trimesh.creation.box(extents=[0.2, 0.2, 0.2]).export(path)
@@ -322,7 +322,7 @@ def test_recordings_draw_the_obstacles_and_the_spheres(tmp_path, sphere_arm):
     solution with its radii."""
     import trimesh
 
-    from framework.recording import Recorder, read_recording
+    from framework.io.recording import Recorder, read_recording
 
     robot, shape, exact = sphere_arm
     path = tmp_path / "block.stl"
@@ -372,8 +372,8 @@ def test_m_fabrik_plans_around_the_shadows_of_the_same_scene(tmp_path):
     obstacles and its base stays out of them."""
     import shapely.geometry as sg
 
-    from framework.fabrik import Environment
-    from framework.spheres import surface_points
+    from framework.solvers.fabrik import Environment
+    from framework.geometry.spheres import surface_points
 
     scene = fw.Scene((fw.Box([0.8, 0.2, 0.3], [0.3, 0.4, 0.6], TURNED), fw.Sphere([-0.5, 0.5, 0.2], 0.2),
                       fw.Capsule([0.0, -0.8, 0.3], 0.1, 0.6, TURNED), fw.Plane([0, 0, 0], [0, 0, 1])))
@@ -399,7 +399,7 @@ type = "box"
 center = [0.6, 0.0, 0.3]
 size = [0.3, 0.3, 0.6]
 """)
-    from framework.fabrik.taskfile import run_reach_task
+    from framework.io.fabrik_tasks import run_reach_task
 
     task = load_task(task_file)
     assert len(task.environment.obstacles) == 1
@@ -414,7 +414,7 @@ size = [0.3, 0.3, 0.6]
 def test_frames_added_by_a_collision_term_after_a_drawing_was_made():
     """A drawing made first, a collision term adding its body frames to the model after: the drawing still poses
     every frame (Pinocchio sizes its Data once; writing past it corrupted memory)."""
-    from framework.drawing import RobotDrawing
+    from framework.viz.drawing import RobotDrawing
 
     robot = fw.load_robot("youbot_dual")
     drawing = RobotDrawing(robot)

@@ -7,9 +7,9 @@ import pytest
 
 import framework as fw
 from framework.costs import Motion, Position
-from framework.problem import Problem
-from framework.solve import solve
-from framework.taskfile import load_task, resolve_task
+from framework.costs.problem import Problem
+from framework.solvers.solve import solve
+from framework.io.taskfile import load_task, resolve_task
 
 Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 000's q_prev (its task file)
 

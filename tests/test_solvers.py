@@ -349,7 +349,8 @@ def test_progress_prints_a_few_lines_to_stderr(capsys):
 def test_solver_names_are_one_name_space():
     """A metaheuristic named like an IK solver (or the reverse) would shadow it in solve(): refused, by name."""
     from framework.solvers import register, register_ik
-    from framework.solvers.registry import IK_SOLVERS, SOLVERS
+    from framework.optimizers.registry import ALGORITHMS as SOLVERS
+    from framework.solvers.registry import IK_SOLVERS
 
     before = (dict(SOLVERS), dict(IK_SOLVERS))
     with pytest.raises(SolverError, match="'hybrid' is already registered"):

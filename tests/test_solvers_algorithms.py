@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from framework.solvers import Box, available_solvers, get_solver, minimize
-from framework.solvers.cs import levy_steps
-from framework.solvers.population import binomial_crossover, distinct_indices
-from framework.solvers.sde import SDE
+from framework.optimizers.cs import levy_steps
+from framework.optimizers.population import binomial_crossover, distinct_indices
+from framework.optimizers.sde import SDE
 
 N = 6
 BOX = Box(np.full(N, -1.0), np.full(N, 1.0))

@@ -99,8 +99,8 @@ def test_compiled_loop_is_the_ask_tell_loop(bounds):
     """``solve(problem, "cmaes_fast")`` runs the whole loop compiled; it must give bitwise the same generations as
     the shared Python loop ``minimize`` (same random numbers, repairs, updates), warm start included."""
     import framework as fw
-    from framework.problem import Problem
-    from framework.solve import solve
+    from framework.costs.problem import Problem
+    from framework.solvers.solve import solve
     from framework.solvers import minimize
 
     robot = fw.load_robot("youbot_dual_mobile")

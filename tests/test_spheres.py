@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework.collision import RobotShape
-from framework.spheres import fit_spheres, sphere_cover, surface_points
+from framework.geometry.collision import RobotShape
+from framework.geometry.spheres import fit_spheres, sphere_cover, surface_points
 
 PRIMITIVES = """<robot name="shapes">
   <link name="a"><collision><origin xyz="0.1 0 0" rpy="0.3 0 0"/><geometry><box size="0.3 0.1 0.05"/></geometry>

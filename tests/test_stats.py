@@ -1,4 +1,4 @@
-"""framework.stats: the sign test against scipy's exact binomial test, summaries against numpy."""
+"""framework.bench.stats: the sign test against scipy's exact binomial test, summaries against numpy."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import pytest
 from scipy.stats import binomtest
 
 from framework.errors import MetaikError
-from framework.stats import binomial_two_sided, sign_test, summarize
+from framework.bench.stats import binomial_two_sided, sign_test, summarize
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 7, 10, 31, 50, 64, 99, 100, 201])

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import numpy as np
+
+from framework.solvers.settings import DEFAULTS
 import pytest
 
 import framework as fw
-from framework import trajectory as tr
+from framework.tracking import paths
+from framework.tracking import trajectory as tr
 from framework.costs import Motion, Position
-from framework.problem import Problem
-from framework.taskfile import load_task, resolve_task
+from framework.costs.problem import Problem
+from framework.io.taskfile import load_task, resolve_task
 from framework.tracking import TrackingTask, joint_steps, predictor, track
 
 Q_PREV = load_task(resolve_task("paper000_circular")).cases[0].initial  # paper 000's q_prev (its task file)
@@ -33,7 +36,7 @@ def arm() -> fw.Robot:
 
 
 def test_tracked_circle_matches_the_path(arm):
-    circle = tr.circle((0.3, 0.0, 0.3), 0.03, 25)
+    circle = paths.circle((0.3, 0.0, 0.3), 0.03, 25)
     result = track(arm, circle, TrackingTask(motion=0.01), solver="hybrid", progress=False)
     assert result.completed and result.stop_reason == "completed" and len(result) == 25
     achieved = result.frame_positions(arm, "ee")[:, 0]
@@ -49,7 +52,7 @@ def test_tracked_circle_matches_the_path(arm):
 
 
 def test_paper000_coordinated_tracking_keeps_the_relative_offset(mobile_dual):
-    path = tr.paper000("circular", 200)[:15]
+    path = paths.paper000("circular", 200)[:15]
     result = track(
         mobile_dual, path, TrackingTask(**PAPER000), solver="hybrid", initial=Q_PREV, progress=False
     )
@@ -67,7 +70,7 @@ def test_paper000_coordinated_tracking_keeps_the_relative_offset(mobile_dual):
 
 
 def test_relative_coordination_holds_the_follower_at_the_offset(mobile_dual):
-    path = tr.paper000("rose", 200)[:8]
+    path = paths.paper000("rose", 200)[:8]
     task = TrackingTask(**{**PAPER000, "coordination": "relative"})
     result = track(mobile_dual, path, task, solver="hybrid", initial=Q_PREV, progress=False)
     P = result.frame_positions(mobile_dual, ("arm1_ee", "arm2_ee"))
@@ -77,9 +80,10 @@ def test_relative_coordination_holds_the_follower_at_the_offset(mobile_dual):
 def test_cmaes_continues_the_previous_waypoints_distribution(mobile_dual):
     """Paper 000 (its weighted sum) with cmaes_fast, 300 iterations per point: starting each point from the Jacobian prediction with the
     previous point's adapted covariance and a small step is far more accurate than a fresh identity covariance."""
-    path = tr.paper000("sinusoidal", 200)[:6]
+    path = paths.paper000("sinusoidal", 200)[:6]
     runs = {
         name: track(mobile_dual, path, TrackingTask(**PAPER000), solver="cmaes_fast", initial=Q_PREV, seed=0,
+                    max_iterations=300, tolerance=1e-4,
                     options=options, priorities=False, progress=False)
         for name, options in (("continued", None), ("fresh", {"covariance": None}))
     }
@@ -109,14 +113,14 @@ def test_task_covariance_is_wide_along_the_null_space_and_narrow_across_the_task
 
 
 def test_warm_start_cuts_evaluations(arm):
-    circle = tr.circle((0.3, 0.0, 0.3), 0.03, 8)
+    circle = paths.circle((0.3, 0.0, 0.3), 0.03, 8)
     runs = {
         warm: track(
             arm,
             circle,
             TrackingTask(motion=0.01),
             solver="cmaes_fast",
-            iterations_per_point=300,
+            max_iterations=300,
             tolerance=1e-6,
             stop_at_tolerance=True,
             warm_start=warm,
@@ -141,7 +145,7 @@ def test_warm_start_cuts_evaluations(arm):
 
 def test_orientation_tracking_with_paper002_weights():
     puma = fw.load_robot("puma560")
-    path = tr.paper002("puma560", "circle", 6)
+    path = paths.paper002("puma560", "circle", 6)
     task = TrackingTask(position_weight=0.7143, orientation_weight=0.1786, motion=0.1071, motion_norm="l1")
     result = track(puma, path, task, solver="hybrid", seed=1, progress=False)
     assert result.position_error.max() < 1e-9 and result.orientation_error.max() < 1e-9
@@ -155,7 +159,7 @@ def test_builder_callable_and_callback_stop(arm):
         calls.append(k)
         return Position("ee", position) + 0.01 * Motion("all", previous)
 
-    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
+    path = paths.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
     result = track(arm, path, builder, solver="hybrid", progress=False, callback=lambda k, r: k == 3)
     assert len(result) == 4 and result.stop_reason == "callback" and not result.completed
     assert calls == [0, 1, 2, 3]
@@ -166,15 +170,15 @@ def test_ctrl_c_keeps_the_points_done(arm):
         if k == 2:
             raise KeyboardInterrupt
 
-    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
+    path = paths.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 10)
     result = track(arm, path, solver="hybrid", progress=False, callback=interrupt)
     assert result.stop_reason == "interrupted" and len(result) == 3
     assert result.configurations.shape == (3, arm.n) and result.position_error.shape == (3,)
 
 
 def test_runs_are_reproducible(arm):
-    path = tr.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 4)
-    a, b = (track(arm, path, solver="de", iterations_per_point=20, seed=7, progress=False) for _ in range(2))
+    path = paths.line((0.3, -0.02, 0.3), (0.3, 0.02, 0.3), 4)
+    a, b = (track(arm, path, solver="de", max_iterations=20, seed=7, progress=False) for _ in range(2))
     np.testing.assert_array_equal(a.configurations, b.configurations)
 
 
@@ -213,7 +217,7 @@ def test_joint_steps_wrap_continuous_angles():
 
 
 def test_bad_input(arm, mobile_dual):
-    path = tr.line((0.3, 0.0, 0.3), (0.3, 0.01, 0.3), 3)
+    path = paths.line((0.3, 0.0, 0.3), (0.3, 0.01, 0.3), 3)
     with pytest.raises(fw.ConfigurationError):
         track(arm, path, initial=np.zeros(4), progress=False)
     with pytest.raises(fw.ConfigurationError):
@@ -232,16 +236,16 @@ def test_bad_input(arm, mobile_dual):
         track(arm, path, TrackingTask(motion={"legs": 1.0}), progress=False)
     with pytest.raises(fw.TaskError, match="Trajectory"):
         track(arm, np.zeros((3, 3)), progress=False)
-    with pytest.raises(fw.TaskError, match="iterations_per_point"):
-        track(arm, path, iterations_per_point=0, progress=False)
+    with pytest.raises(fw.SolverError, match="max_iterations"):
+        track(arm, path, max_iterations=0, progress=False)
     with pytest.raises(fw.SolverError):
         track(arm, path, solver="gradient_descent", progress=False)
 
 
-def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0, tolerance=1e-4, after=None):
+def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0, tolerance=DEFAULTS.tolerance, after=None):
     """The tracking loop's definition, written out: one ``solve`` per waypoint from the previous solution, the
     targets and motion references moved in place, one generator through every solve."""
-    from framework.solve import solve
+    from framework.solvers.solve import solve
     from framework.tracking import FIRST_GLOBAL_ITERATIONS
 
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
@@ -250,7 +254,7 @@ def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0, toleranc
     for k in range(path.K):
         spec.update(problem.objective, path.positions[k], path.rotation(k), previous)
         first = k == 0 and solver == "hybrid"
-        results.append(solve(problem, solver, seed=rng, max_iterations=300, tolerance=tolerance,
+        results.append(solve(problem, solver, seed=rng, max_iterations=DEFAULTS.max_iterations, tolerance=tolerance,
                              initial=previous[None], options={"global_iterations": FIRST_GLOBAL_ITERATIONS}
                              if first else None))
         previous = results[-1].configuration
@@ -268,7 +272,7 @@ def test_chained_waypoints_are_what_one_solve_per_waypoint_gives(arm, solver, mo
     chained = []
     follow = chain.follow_items
     monkeypatch.setattr(chain, "follow_items", lambda *a: chained.append(follow(*a)) or chained[-1])
-    positions = tr.circle((0.3, 0.0, 0.3), 0.03, 14).positions.copy()
+    positions = paths.circle((0.3, 0.0, 0.3), 0.03, 14).positions.copy()
     positions[4:6] += (2.0, 0.0, 0.0)
     path = tr.Trajectory(positions, name="with a gap")
     spec = TrackingTask(motion=0.01)
@@ -290,7 +294,7 @@ def test_chained_waypoints_are_what_one_solve_per_waypoint_gives(arm, solver, mo
 
 def test_chained_orientation_path_and_a_callback_stop_inside_a_stretch():
     puma = fw.load_robot("puma560")
-    path = tr.paper002("puma560", "circle", 12)
+    path = paths.paper002("puma560", "circle", 12)
     spec = TrackingTask(position_weight=0.7143, orientation_weight=0.1786, motion=0.1071, motion_norm="l1")
     ours, theirs = np.random.default_rng(3), np.random.default_rng(3)
     result = track(puma, path, spec, solver="hybrid", seed=ours, progress=False, callback=lambda k, r: k == 7)
@@ -315,7 +319,7 @@ def test_tracking_with_collision_terms_gives_what_one_solve_per_waypoint_gives(m
     scene = load_task(resolve_task("paper000_circular_table")).scene
     shape = fw.RobotShape(mobile_dual)
     extra = fw.SelfCollision(shape) + fw.Obstacles(shape, scene, margin=0.01) if table else fw.SelfCollision(shape)
-    path = tr.paper000("circular", 200)[:12]
+    path = paths.paper000("circular", 200)[:12]
     spec = TrackingTask(**PAPER000, extra=extra)
     result = track(mobile_dual, path, spec, solver="hybrid", initial=Q_PREV, tolerance=1e-6, progress=False)
     reference = _one_solve_per_waypoint(mobile_dual, path, spec, "hybrid", Q_PREV, tolerance=1e-6)
@@ -335,7 +339,7 @@ def test_a_callback_that_moves_a_term_is_seen_from_the_next_waypoint(arm):
     # term, as one solve per waypoint solves them
     posture = Motion("all", arm.middle, name="posture")
     spec = TrackingTask(motion=0.01, extra=0.05 * posture)
-    path = tr.circle((0.3, 0.0, 0.3), 0.03, 10)
+    path = paths.circle((0.3, 0.0, 0.3), 0.03, 10)
     elsewhere = arm.middle + 0.3
 
     def move(k, result):

@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework import trajectory as tr
+from framework.tracking import paths
+from framework.tracking import trajectory as tr
 from tests.conftest import same_framework_env
 from framework.cli import EXIT_INPUT, EXIT_MISSED, EXIT_OK, main
 from framework.resources import data_dir
-from framework.taskfile import load_task
+from framework.io.taskfile import load_task
 
 TASKS = data_dir("tasks")
 
@@ -47,14 +48,14 @@ path = "path.csv"
 """
 
 
-@pytest.mark.parametrize("path", tr.PAPER000_PATHS)
+@pytest.mark.parametrize("path", paths.PAPER000_PATHS)
 def test_paper000_task_files_are_the_papers_paths(path):
     task = load_task(TASKS / f"paper000_{path}.toml")
     case = task.cases[0]
     assert (
         task.is_tracking and task.robot.name == "youbot_dual_mobile" and task.solver["max_iterations"] == 300
     )
-    np.testing.assert_allclose(case.trajectory.positions, tr.paper000(path).positions, atol=1e-15)
+    np.testing.assert_allclose(case.trajectory.positions, paths.paper000(path).positions, atol=1e-15)
     np.testing.assert_allclose(case.initial[:3], [0, 0, np.pi / 2])
     objective = case.builder(5, case.trajectory.positions[5], None, case.initial)
     assert [t.name for _, t in objective] == ["e_t1", "e_t2", "e_q0", "e_q1", "e_q2"]
@@ -68,7 +69,7 @@ def test_paper000_task_files_are_the_papers_paths(path):
 def test_paper002_task_files(robot, path):
     task = load_task(TASKS / f"paper002_{robot}_{path}.toml")
     case = task.cases[0]
-    expected = tr.paper002(task.robot.name, path, case.trajectory.K)
+    expected = paths.paper002(task.robot.name, path, case.trajectory.K)
     assert (32 if path == "circle" else 73) == case.trajectory.K
     np.testing.assert_allclose(case.trajectory.positions, expected.positions, atol=1e-15)
     np.testing.assert_allclose(case.trajectory.rotations, expected.rotations, atol=1e-15)
@@ -104,7 +105,7 @@ def test_run_tracks_and_prints_the_summary(capsys):
 
 
 def test_user_task_file_with_cases_and_a_csv_path(tmp_path, capsys):
-    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    paths.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
     file = tmp_path / "wave.toml"
     file.write_text(TRACK)
     task = load_task(file)
@@ -137,7 +138,7 @@ def test_user_task_file_with_cases_and_a_csv_path(tmp_path, capsys):
     ],
 )
 def test_bad_trajectory_tables_exit_2(tmp_path, capsys, change, match):
-    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    paths.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
     file = tmp_path / "bad.toml"
     file.write_text(TRACK.replace(*change, 1))
     with pytest.raises(fw.TaskError, match=match):
@@ -182,7 +183,7 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint(tmp_path):
     assert len(reference) == 61
     assert rows[-1].count(",") == reference[0].count(",")  # no torn last row
     assert rows == reference[: len(rows)]
-    from framework.recording import read_recording
+    from framework.io.recording import read_recording
 
     _, X_full, _ = read_recording(tmp_path / "full.rrd").configurations("waypoint")
     assert len(X_full) == 60  # each waypoint posed once
@@ -198,14 +199,14 @@ def test_a_killed_tracking_run_keeps_every_finished_waypoint(tmp_path):
 def test_task_file_paths_run_chained_with_the_answers_of_one_solve_per_waypoint(tmp_path, monkeypatch, motion):
     # the task file's terms know their parameters along the path: its waypoints run in compiled stretches (a
     # motion term with a `previous` of its own keeps it: only the others measure from the previous solution)
-    from framework.problem import Problem
-    from framework.solve import solve
+    from framework.costs.problem import Problem
+    from framework.solvers.solve import solve
     from framework.tracking import FIRST_GLOBAL_ITERATIONS, chain, track
 
     chained = []
     follow = chain.follow_items
     monkeypatch.setattr(chain, "follow_items", lambda *a: chained.append(follow(*a)) or chained[-1])
-    tr.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
+    paths.line((0.3, 0.0, 0.25), (0.3, 0.03, 0.25), 6).to_csv(tmp_path / "path.csv")
     file = tmp_path / "wave.toml"
     file.write_text(TRACK.replace('group = "all"', 'group = "all"\n' + motion, 1))
     case = load_task(file).cases[0]

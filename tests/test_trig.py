@@ -6,7 +6,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from framework.trig import REDUCED, sincos
+from framework.compiled.trig import REDUCED, sincos
 
 
 @numba.njit  # (not cached: a cached caller would keep an old inlined sincos)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import framework as fw
-from framework.drawing import LINK_COLOR, RobotDrawing, robot_visuals
-from framework.viewer import Viewer, find_chromium, screenshot, screenshot_command, segment_transforms
+from framework.viz.drawing import LINK_COLOR, RobotDrawing, robot_visuals
+from framework.viz.viewer import Viewer, find_chromium, screenshot, screenshot_command, segment_transforms
 
 
 def test_segment_transforms_map_the_unit_cylinder_onto_each_segment():

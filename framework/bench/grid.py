@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import MetaikError, TaskError
-from ..loading import load_robot
-from ..problem import Problem
+from ..model.loading import load_robot
+from ..costs.problem import Problem
 from ..validate import check_table
 
 HISTORY_POINTS = 200
@@ -124,7 +124,7 @@ def bench_table(raw: Mapping[str, Any], path: Path) -> dict[str, Any]:
 
 def expand_task(path: str | Path) -> BenchTask:
     """Load a task file and expand its systems and generated cases into :class:`BenchCase` s (deterministic)."""
-    from ..taskfile import TaskFile, load_task
+    from ..io.taskfile import TaskFile, load_task
 
     path = Path(path).resolve()
     task = load_task(path)
@@ -172,7 +172,7 @@ def problem_fingerprint(
 
 def _parse(path: Path, raw: dict[str, Any]):
     """A task from the (rewritten) TOML dict of ``path``; errors name the file."""
-    from ..taskfile import task_from_dict
+    from ..io.taskfile import task_from_dict
 
     try:
         return task_from_dict(raw, path)
@@ -299,10 +299,10 @@ def plan(
     ``cases`` keeps only cases (or systems) with these names. The grid is sized first: more than ``grid_limit``
     runs raise :class:`TaskError` (raise the limit to run it); its :class:`RunSpec` s are made as they are read.
     """
-    from ..solve import DEFAULT_SOLVER
+    from ..solvers.solve import DEFAULT_SOLVER
     from ..solvers import solver_names
-    from ..solvers.base import MAX_POPULATION
-    from ..solvers.ik import positive_int
+    from ..optimizers.base import MAX_POPULATION
+    from ..validate import positive_int
 
     def option(value, task_value, what: str, where: str, **limits) -> int:
         try:

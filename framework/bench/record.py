@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from ..problem import Problem
-from ..stats import (
+from ..costs.problem import Problem
+from .stats import (
     METRICS,
 )
 from .grid import RunSpec, jsonable
@@ -25,7 +25,7 @@ class RunRecord:
 
     Attributes:
         task, system, case, solver, seed, budget, problem: the run's identity (``budget``: canonical JSON string).
-        settings: every solver setting used (from :class:`~framework.solve.IKResult`).
+        settings: every solver setting used (from :class:`~framework.solvers.solve.IKResult`).
         terms: unweighted value of every cost term, by name.
         task_error: sum of the unweighted task terms (position [m], orientation, relative position [m]).
         position_error, orientation_error, motion_error: sums of the terms measuring positions (Position,
@@ -106,7 +106,7 @@ def _error_sums(problem: Problem, terms: Mapping[str, float]) -> dict[str, float
 
 def execute(spec: RunSpec, problem: Problem) -> RunRecord:
     """Solve one run of the grid and build its record."""
-    from ..solve import solve
+    from ..solvers.solve import solve
 
     budget = json.loads(spec.budget)
     cpu = time.process_time()

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import MetaikError
-from ..stats import (
+from .stats import (
     group_records,
     sign_markdown,
     sign_rows,
@@ -50,7 +50,7 @@ def write_report(
 
     Returns the written paths.
     """
-    from .. import plots
+    from . import plots
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -221,7 +221,7 @@ def write_doc(path: str | Path, title: str, command: str, body: str) -> Path:
 
 def doc_figures(records: Sequence[RunRecord], doc: Path, *, group_by: str, max_iteration: int | None = None):
     """Figures of a results document, in ``<doc folder>/figures/bench/<doc name>_*.png``; group -> paths."""
-    from .. import plots
+    from . import plots
 
     out = doc.parent / "figures" / "bench"
     prefix = doc.stem + "_"

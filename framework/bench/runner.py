@@ -19,7 +19,7 @@ from queue import Empty
 from typing import Any
 
 from ..interrupts import graceful_interrupt
-from ..problem import Problem
+from ..costs.problem import Problem
 from .grid import BenchTask, Grid, RunSpec, expand_task
 from .record import execute
 from .store import drop_torn_tail, exclusive, read_results
@@ -259,7 +259,7 @@ def _run_cluster(
     jobs: int,
     chunk_size: int | None,
 ) -> int:
-    from ..cluster import cluster_client, completed
+    from ..solvers.cluster import cluster_client, completed
 
     received = 0
     with cluster_client(scheduler, jobs) as client:

@@ -14,9 +14,9 @@ from pathlib import Path
 from rich.console import Console
 from rich.markup import escape
 
-from .. import compile_cache
+from ..compiled import cache as compile_cache
 from ..errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError
-from ..taskfile import resolve_task
+from ..io.taskfile import resolve_task
 from .bench import add_bench_command, bench_command
 from .info import robots_command, show_command, solvers_command, tasks_command
 from .reach import add_reach_command, reach_command

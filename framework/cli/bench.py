@@ -11,11 +11,11 @@ from ..bench.report import doc_figures, grid_markdown, report_markdown, write_do
 from ..bench.runner import run_grid
 from ..bench.store import drop_runs, grid_records
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, MetaikError, TaskError
-from ..stats import (
+from ..bench.stats import (
     sci,
     summary_rows,
 )
-from ..taskfile import resolve_task
+from ..io.taskfile import resolve_task
 
 
 # ---------------------------------------------------------------------------------------------- command line
@@ -75,6 +75,9 @@ def bench_command(args, console) -> int:
         if value is not None and value < 1:
             raise TaskError(f"{flag} must be an integer >= 1; got {value}")
     out = Path(args.out) if args.out else Path("results") / "bench" / grid.name
+    _writable_folder(out, "--out")
+    if args.doc:
+        _writable_folder(Path(args.doc).parent, "--doc's folder")
     results = out / "results.jsonl"
     console.print(f"[bold]{grid.name}[/]: {len(grid.specs)} runs → {results}")
     if args.rerun and not args.report_only:
@@ -149,3 +152,15 @@ def command_line(args) -> str:
         for v in values:
             words += [flag] if v is True else [flag, str(v)]
     return shlex.join(words)
+
+
+def _writable_folder(folder: Path, what: str) -> None:
+    """``folder`` made if it does not exist; a file in its place (or above it), or a folder that cannot be made,
+    is a :class:`TaskError` naming ``what`` before any run starts."""
+    for above in (folder, *folder.parents):
+        if above.exists() and not above.is_dir():
+            raise TaskError(f"{what} {folder}: {above} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise TaskError(f"{what} {folder}: cannot make the folder ({err.strerror})") from None

@@ -11,7 +11,7 @@ from ..errors import EXIT_OK
 
 
 def robots_command(args, console: Console) -> int:
-    from ..loading import load_robot, robot_index
+    from ..model.loading import load_robot, robot_index
 
     table = Table(title="Shipped robots (robots/index.toml)")
     for column in ("name", "DOF", "end-effectors", "groups"):
@@ -26,22 +26,22 @@ def robots_command(args, console: Console) -> int:
 
 
 def solvers_command(args, console: Console) -> int:
-    from ..solvers import IK_SOLVERS, SOLVERS, ik_solver
+    from ..solvers import ALGORITHMS, IK_SOLVERS, ik_solver
 
     table = Table(title="Solvers: solve(problem, name, options={...}); metaik run TASK --solver NAME")
     for column in ("name", "kind", "options (defaults)", "reference"):
         table.add_column(column, overflow="fold")
-    for name in [*sorted(IK_SOLVERS), *sorted(SOLVERS)]:
+    for name in [*sorted(IK_SOLVERS), *sorted(ALGORITHMS)]:
         solver = ik_solver(name)
         defaults = ", ".join(f"{k}={v!r}" for k, v in solver.defaults().items()) or "—"
-        reference = solver.reference or (SOLVERS[name].__doc__ or "").strip().splitlines()[0]
+        reference = solver.reference or (ALGORITHMS[name].__doc__ or "").strip().splitlines()[0]
         table.add_row(name, solver.kind, escape(defaults), escape(reference))
     console.print(table)
     return EXIT_OK
 
 
 def show_command(args, console: Console) -> int:
-    from ..loading import load_robot
+    from ..model.loading import load_robot
 
     robot = load_robot(args.robot)
     console.print(f"[bold]{robot.name}[/]: {robot.n} joint coordinates, end-effectors {list(robot.end_effectors)}")

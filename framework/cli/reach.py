@@ -63,7 +63,7 @@ def run_placement(args, console: Console, task) -> int:
     """``metaik run`` of a base-placement task file: rank the base poses, solve the whole robot from the best one
     (both hands, motion minimized on the task), print it and, with ``--record``, record it."""
     from ..errors import EXIT_MISSED
-    from ..reachability import base_placements, solve_from_base
+    from ..reach.capability import base_placements, solve_from_base
 
     console.print(f"[bold]{escape(task.name)}[/] on {escape(task.robot.name)}: {escape(task.description)}")
     settings = {**task.settings, **({"seed": args.seed} if args.seed is not None else {})}
@@ -76,7 +76,7 @@ def run_placement(args, console: Console, task) -> int:
     console.print(f"whole robot from the best base pose: success {result.success}, errors "
                   + escape(", ".join(f"{k} {v:.1e}" for k, v in result.errors.items())))
     if args.record:
-        from ..recording import Recorder
+        from ..io.recording import Recorder
 
         with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
             recorder.log_solution(result, problem=problem, name="placed")
@@ -85,8 +85,8 @@ def run_placement(args, console: Console, task) -> int:
 
 
 def reach_command(args, console: Console) -> int:
-    from ..loading import load_robot
-    from ..reachability import base_placements, reachability_map
+    from ..model.loading import load_robot
+    from ..reach.capability import base_placements, reachability_map
 
     robot = load_robot(args.robot)
     progress = False if args.no_progress else None

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from ..recording.reader import read_recording
-from ..recording.replay import replay, replay_command_line
+from ..io.recording.reader import read_recording
+from ..io.recording.replay import replay, replay_command_line
 
 
 def add_replay_command(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:

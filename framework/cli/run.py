@@ -15,17 +15,17 @@ from rich.table import Table
 
 from ..errors import EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, TaskError
 from ..interrupts import graceful_interrupt
-from ..fabrik.taskfile import ReachTask
-from ..placement_taskfile import PlacementTask
+from ..io.fabrik_tasks import ReachTask
+from ..io.placement import PlacementTask
 from .reach import run_placement
-from ..recording import Recorder
-from ..solve import DEFAULT_SOLVER
-from ..taskfile import resolve_task
+from ..io.recording import Recorder
+from ..solvers.settings import DEFAULTS
+from ..io.taskfile import resolve_task
 
 
 def run_command(args, console: Console) -> int:
-    from ..solve import solve
-    from ..taskfile import load_task
+    from ..solvers.solve import solve
+    from ..io.taskfile import load_task
 
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
     if isinstance(task, ReachTask):  # M-FABRIK or its Jacobian baselines
@@ -36,7 +36,7 @@ def run_command(args, console: Console) -> int:
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}
     settings.update({k: v for k, v in overrides.items() if v is not None})
-    solver = settings.get("name", DEFAULT_SOLVER)
+    solver = settings.get("name", DEFAULTS.solver)
     if task.is_tracking:
         return _run_tracking(args, console, task, settings, solver)
     cases = [c for c in task.cases if not args.case or c.name in args.case]
@@ -45,30 +45,25 @@ def run_command(args, console: Console) -> int:
     console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF) with {solver}: {task.description}")
 
     names = cases[0].problem.names
-    table = Table(title=f"{task.name}: {solver}, seed {settings.get('seed', 0)} (unweighted terms)")
+    table = Table(title=f"{task.name}: {solver}, seed {asked(settings)['seed']} (unweighted terms)")
     table.add_column("")
     rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
                                                    "evaluations", "time (s)")}
     all_ok, interrupted, solved = True, False, None
-    with console.status("solving") as status, _recorder(args, task, settings) as recorder:
+    header = ["case", "success", "task_error", "cost", *task.robot.coordinate_names]
+    with console.status("solving") as status, _recorder(args, task, settings) as recorder, \
+            _csv_rows(args.output, header) as csv_row:
         for case in cases:
             status.update(f"solving {case.name}")
             try:
-                result = solve(
-                    case.problem,
-                    solver,
-                    seed=settings.get("seed", 0),
-                    max_iterations=settings.get("max_iterations", 1000),
-                    population=settings.get("population", 30),
-                    tolerance=settings.get("tolerance", 1e-4),
-                    stop_at_tolerance=settings.get("stop_at_tolerance", False),
-                    options=settings.get("options"),
-                    callback=recorder.term_logger(case.problem, case.name) if recorder else None,
-                )
+                result = solve(case.problem, solver, **asked(settings),
+                               callback=recorder.term_logger(case.problem, case.name) if recorder else None)
             except KeyboardInterrupt:  # a second Ctrl-C, or one while the solver's code compiled: no result
                 interrupted = True
                 break
             solved = (case, result)
+            csv_row(case.name, result.success, f"{result.task_error:.6e}", f"{result.cost:.17g}",
+                    *(f"{v:.17g}" for v in result.configuration))
             if recorder:
                 recorder.log_case(case, result)
             interrupted = result.stop_reason == "interrupted"
@@ -93,6 +88,8 @@ def run_command(args, console: Console) -> int:
         console.print(f"configuration of {solved[0].name}: " + "; ".join(
             f"{g} {np.array2string(x[idx], precision=4, suppress_small=True)}" for g, idx in groups.items()))
     _recorded(args, console)
+    if args.output is not None:
+        console.print(f"wrote {args.output}")
     if interrupted:
         Console(stderr=True).print(f"interrupted during {case.name!r}: {len(table.columns) - 1} of {len(cases)} "
                                    "cases shown", highlight=False)
@@ -104,7 +101,7 @@ def _run_reach(args, console: Console, task) -> int:
     """``metaik run`` of a reach task (paper 003): random targets or a path, with obstacles and Algorithm 2."""
     from rich.progress import Progress
 
-    from ..fabrik.taskfile import run_reach_task
+    from ..io.fabrik_tasks import run_reach_task
 
     solver = args.solver or task.solver["name"]
     what = f"{len(task.targets)} set-points of a path" if task.is_path else f"{task.random} random targets"
@@ -166,16 +163,16 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     cases = [c for c in task.cases if not args.case or c.name in args.case]
     if not cases:
         raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
-    tolerance = settings.get("tolerance", 1e-4)
+    tolerance = asked(settings)["tolerance"]
     results: list = []
     try:
         with _recorder(args, task, settings) as recorder, _waypoint_csv(args.output, task.robot) as csv_row:
             console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
-                          f"({settings.get('max_iterations', 300)} iterations per point): {task.description}")
+                          f"({asked(settings)['max_iterations'] or 'default'} iterations per point): {task.description}")
             interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results, csv_row)
     except KeyboardInterrupt:  # before the tracking loop took over Ctrl-C (files opening, the problem's code
         interrupted = True  # compiling): what was done is in the table, the CSV and the recording
-    console.print(tracking_table(task, results, solver, settings.get("seed", 0), tolerance))
+    console.print(tracking_table(task, results, solver, asked(settings)["seed"], tolerance))
     if args.output is not None:
         console.print(f"wrote {args.output}")
     _recorded(args, console)
@@ -207,17 +204,12 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
         result = track(
             task.robot, case.trajectory, case.builder,
             solver=solver,
-            seed=settings.get("seed", 0),
-            iterations_per_point=settings.get("max_iterations", 300),
-            population=settings.get("population", 30),
+            **asked(settings),
             initial=case.initial,
             warm_start=settings.get("warm_start", True),
             predict=settings.get("predict"),
-            tolerance=tolerance,
-            stop_at_tolerance=settings.get("stop_at_tolerance", False),
             bounds=settings.get("bounds", "resample"),
             priorities=task.priorities,
-            options=settings.get("options"),
             progress=False if args.no_progress else None,
             callback=solved,
         )
@@ -262,10 +254,34 @@ def tracking_table(task, results: list, solver: str, seed: int, tolerance: float
     return table
 
 
-@contextmanager
+def asked(settings: dict) -> dict:
+    """The solve settings of a task file's ``[solver]`` table (with the command line's overrides), each one not
+    given taken from :data:`~framework.solvers.settings.DEFAULTS` (checked where the file was read)."""
+    return {"seed": settings.get("seed", DEFAULTS.seed), "tolerance": settings.get("tolerance", DEFAULTS.tolerance),
+            "max_iterations": settings.get("max_iterations", DEFAULTS.max_iterations),
+            "population": settings.get("population", DEFAULTS.population),
+            "stop_at_tolerance": settings.get("stop_at_tolerance", DEFAULTS.stop_at_tolerance),
+            "options": settings.get("options", DEFAULTS.options)}
+
+
 def _waypoint_csv(path: Path | None, robot):
     """A writer of one CSV row per solved waypoint (case, k, joint coordinates, position / orientation / motion
     error), flushed at once so a killed run keeps every finished waypoint; a no-op without ``path``."""
+    header = ["case", "k", *robot.coordinate_names, "position_error", "orientation_error", "motion_error"]
+    rows = _csv_rows(path, header)
+
+    @contextmanager
+    def waypoints():
+        with rows as row:
+            yield lambda case, k, q, errors: row(case, k, *(f"{v:.17g}" for v in q), *(f"{e:.6e}" for e in errors))
+
+    return waypoints()
+
+
+@contextmanager
+def _csv_rows(path: Path | None, header: list[str]):
+    """A writer of CSV rows under ``header`` to ``--output`` ``path`` (its folder made), each flushed at once; a
+    no-op without ``path``; a path that cannot be written is a :class:`TaskError` before anything runs."""
     import csv
 
     if path is None:
@@ -278,11 +294,11 @@ def _waypoint_csv(path: Path | None, robot):
         raise TaskError(f"cannot write --output {path}: {err.strerror}") from None
     with handle:
         writer = csv.writer(handle)
-        writer.writerow(["case", "k", *robot.coordinate_names, "position_error", "orientation_error", "motion_error"])
+        writer.writerow(header)
         handle.flush()
 
-        def row(case: str, k: int, q, errors) -> None:
-            writer.writerow([case, k, *(f"{v:.17g}" for v in q), *(f"{e:.6e}" for e in errors)])
+        def row(*values) -> None:
+            writer.writerow(values)
             handle.flush()
 
         yield row

@@ -27,15 +27,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ..errors import TaskError
-from ..kinematics import FramePoses
-from ..robot import Robot
+from ..model.kinematics import FramePoses
+from ..model.robot import Robot
 from ..validate import all_finite
 
 from .program import Block, Program, unique_labels
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..collision import CollisionReport
-    from ..hulls import HullPair
+    from ..geometry.collision import CollisionReport
+    from ..geometry.hulls import HullPair
 
 LEVELS = ("task", "regularizer", "value")
 
@@ -113,6 +113,9 @@ class Term:
         version: incremented whenever a target changes in place (packed problems re-read the term then).
     """
 
+    #: numpy hands ``array * term`` to :meth:`__rmul__` (which takes one weight) instead of broadcasting it
+    __array_ufunc__ = None
+
     name: str = "term"
     frames: tuple[str, ...] = ()
     level: str = "regularizer"
@@ -184,11 +187,17 @@ class Term:
         """Move the term's target (terms with a target override this and set :attr:`has_target`)."""
         raise TaskError(f"term {self.name!r} ({type(self).__name__}) has no target to move")
 
+    def copy(self) -> Term:
+        """A copy of the term whose target moves on its own (:meth:`set_target` sets new values, never writes into
+        shared ones; blocks built for this term are not carried over)."""
+        made = copy.copy(self)
+        made.__dict__.pop("_packed", None)
+        return made
+
     def target_parameters(self, robot: Robot, targets: Sequence) -> np.ndarray:
         """``(B, p)``: the parameters of the term's blocks (concatenated in block order) for each of ``targets``,
         each validated as :meth:`set_target` validates it; the term itself does not move."""
-        probe = copy.copy(self)
-        probe.__dict__.pop("_packed", None)
+        probe = self.copy()
         rows = []
         for k, target in enumerate(targets):
             try:
@@ -212,7 +221,7 @@ class Term:
         return None
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
-        """The pairs of convex hulls this term keeps apart (:mod:`framework.hulls`; the collision terms' tighter
+        """The pairs of convex hulls this term keeps apart (:mod:`framework.geometry.hulls`; the collision terms' tighter
         model for the engine's last steps), none for other terms."""
         return ()
 
@@ -258,6 +267,9 @@ def check_weight(weight: float) -> float:
 @dataclass(frozen=True)
 class Objective:
     """A weighted sum of terms: ``f(X) = Σ wᵢ termᵢ(X)``."""
+
+    #: numpy hands ``array * objective`` to :meth:`__rmul__` (which takes one weight) instead of broadcasting it
+    __array_ufunc__ = None
 
     terms: tuple[tuple[float, Term], ...]
 

@@ -34,8 +34,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..native import internal
-from ..trig import sincos
+from ..compiled.native import internal
+from ..compiled.trig import sincos
 
 # ρ kinds: how the residual becomes the value
 NORM, HALFSIN, L1, SQUARED = 0, 1, 2, 3
@@ -63,7 +63,7 @@ class Packed(NamedTuple):
     """A problem's arrays, as the compiled code reads them (see :class:`~framework.costs.program.Program`).
 
     Attributes:
-        joints: ``int64 (J, 5)`` the visited joints of the population kinematics (:mod:`framework.kinematics`).
+        joints: ``int64 (J, 5)`` the visited joints of the population kinematics (:mod:`framework.model.kinematics`).
         joint_geometry: ``(J, 17)`` their placements and axes.
         frame_joints: ``int64 (k,)`` each frame's joint slot; frame_geometry: ``(k, 12)`` its placement there.
         chain_ptr, chain_idx: the coordinates moving each frame, CSR (``int64 (k + 1,)``, ``int64 (c,)``).

@@ -1,6 +1,6 @@
 """Collision avoidance as task terms on sphere covers: hinges on signed distances, zero when clear.
 
-The spheres of a :class:`~framework.spheres.SphereCover` sit on the bodies (joints) they move with; each pair of
+The spheres of a :class:`~framework.geometry.spheres.SphereCover` sit on the bodies (joints) they move with; each pair of
 bodies is one ``SPHERES`` row (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
 — a link's own (``geometry[name]`` frames) or an obstacle — one ``SOLIDS`` row (the closest sphere's signed
 distance to the solid), so a term has one row per pair of bodies however many spheres cover them, and every
@@ -19,14 +19,14 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..collision import CollisionReport, RobotShape
+from ..geometry.collision import CollisionReport, RobotShape
 from ..errors import TaskError
-from ..hulls import HullPair, moving_loose, obstacle_pairs, self_pairs
-from ..robot import Robot
-from ..native import internal
-from ..scene import Scene
-from ..solids import solid_distance
-from ..spheres import SphereCover
+from ..geometry.hulls import HullPair, moving_loose, obstacle_pairs, self_pairs
+from ..model.robot import Robot
+from ..compiled.native import internal
+from ..geometry.scene import Scene
+from ..geometry.solids import solid_distance
+from ..geometry.spheres import SphereCover
 from . import blocks as B
 from .base import Term, TermEntry
 from .curvature import chain_curvature, projected_curvature
@@ -235,7 +235,7 @@ def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> 
 #: (``n_a × n_b``, row-major).
 SPHERES = BlockKind("sphere pairs", spheres_residual, spheres_second_order, contact=True, margin=2)
 #: The spheres of frame ``a``'s body against one solid (a sphere, box, capsule or half-space: a row of
-#: :mod:`framework.solids`) fixed in the world or on frame ``b``, by the closest sphere: ``min(0, min_k sd(s_ak) −
+#: :mod:`framework.geometry.solids`) fixed in the world or on frame ``b``, by the closest sphere: ``min(0, min_k sd(s_ak) −
 #: r_ak − m)`` (1) [m]. Parameters: the solid (16), ``m``, the count, the spheres' bounding sphere (4), the spheres
 #: (4 each); its second order is left to Gauss-Newton.
 SOLIDS = BlockKind("spheres against a solid", solids_residual, contact=True, margin=16)
@@ -290,13 +290,13 @@ def _margin(value: float, what: str) -> float:
 
 class SelfCollision(Term):
     """The robot's own links kept ``margin`` [m] apart: the geometry pairs the
-    :class:`~framework.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out), through
+    :class:`~framework.geometry.collision.RobotShape` checks (adjacent links and SRDF-disabled pairs left out), through
     their sphere covers (or a link's own box or capsule).
 
     Residual: one row per pair of bodies, the smallest ``‖c_a − c_b‖ − (r_a + r_b)`` over their sphere pairs
     (or signed distance of a sphere to a box minus its radius) minus the margin when negative, else 0 [m].
     Pairs whose covers no collision-free configuration separates
-    (:meth:`~framework.collision.RobotShape.inseparable`, with a warning naming them) have no row: the exact
+    (:meth:`~framework.geometry.collision.RobotShape.inseparable`, with a warning naming them) have no row: the exact
     check of :meth:`collisions`, which decides success, still holds them.
     """
 
@@ -384,7 +384,7 @@ class SelfCollision(Term):
 
 
 class Obstacles(Term):
-    """The robot kept ``margin`` [m] clear of a :class:`~framework.scene.Scene`'s obstacles: the spheres of every
+    """The robot kept ``margin`` [m] clear of a :class:`~framework.geometry.scene.Scene`'s obstacles: the spheres of every
     body that moves (not fixed to the world) against every solid.
 
     Residual: one row per body and solid, the smallest ``sd(c) − r`` over the body's spheres minus the margin

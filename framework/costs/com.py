@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TaskError
-from ..robot import Robot
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry, as_vector
 from .curvature import position_curvature

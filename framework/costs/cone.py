@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..robot import Robot
+from ..model.robot import Robot
 from . import blocks as B
 from .base import TermEntry
 from .direction import Direction, axis_world

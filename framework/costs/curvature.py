@@ -9,7 +9,7 @@ vector's second derivative on its target is ``½ ω_i × ω_j``.
 
 from __future__ import annotations
 
-from ..native import internal
+from ..compiled.native import internal
 
 
 @internal

@@ -7,8 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..native import internal
-from ..robot import Robot
+from ..compiled.native import internal
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry, as_vector
 from .curvature import position_curvature, projected_curvature

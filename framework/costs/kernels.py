@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kinematics import fk_one, frame_jacobians_where
-from ..native import borrow, call, compiled, internal, keep_alive
+from ..model.kinematics import fk_one, frame_jacobians_where
+from ..compiled.native import borrow, call, compiled, internal, keep_alive
 from .blocks import FRAME_INDICES, HINGE, LEVEL_TASK, TOL_ANGULAR, TOL_LINEAR, in_level, rho_value
 from .workspace import JACOBIAN_ONLY, LINEARIZE, RESIDUAL, kinematic_views, views, workspaces
 

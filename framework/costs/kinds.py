@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 import numba
 from numba import types
 
-from ..compile_cache import NOTICE, cached, is_cached
-from ..native import OPTIONS
+from ..compiled.cache import NOTICE, cached, is_cached
+from ..compiled.native import OPTIONS
 from .blocks import CONTACT, FRAME_INDICES, HINGE, UNIT_ROWS
 from .workspace import WORKSPACE
 

@@ -1,14 +1,14 @@
 """Rotations and points on frames for the block kernels: ``log`` on SO(3), ``J_l⁻¹``, offsets and world points.
 
-Poses are rows of 12: the rotation row-major, then the position (:mod:`framework.kinematics`).
+Poses are rows of 12: the rotation row-major, then the position (:mod:`framework.model.kinematics`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..native import internal
-from ..trig import sincos
+from ..compiled.native import internal
+from ..compiled.trig import sincos
 
 TWO_PI = 2.0 * np.pi
 

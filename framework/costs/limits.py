@@ -7,7 +7,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..robot import Robot, check_bounds
+from ..model.bounds import check_bounds
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry
 from .kinds import BlockKind

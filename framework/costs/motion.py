@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..robot import Robot
+from ..model.robot import Robot
 from ..validate import all_finite
 from . import blocks as B
 from .base import Term, TermEntry

@@ -13,9 +13,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import TaskError
-from ..native import internal, matrix
-from ..robot import Robot
-from ..rotations import rotation_defects, rotation_target
+from ..compiled.native import internal, matrix
+from ..model.robot import Robot
+from ..geometry.rotations import rotation_defects, rotation_target
 from . import blocks as B
 from .base import Term, TermEntry, finite_rows
 from .curvature import chain_curvature

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot import Robot
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry, as_vector
 from .curvature import position_curvature

@@ -8,8 +8,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TaskError
-from ..robot import Robot
-from ..rotations import pack_transform, rotation_defects, rotation_from
+from ..model.robot import Robot
+from ..geometry.rotations import pack_transform, rotation_defects, rotation_from
 from . import blocks as B
 from .base import Term, TermEntry, as_vector, finite_rows
 from .orientation import ORIENTATION

@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..native import internal
-from ..robot import Robot
+from ..compiled.native import internal
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry, as_vector, finite_rows
 from .curvature import position_curvature

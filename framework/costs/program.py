@@ -11,12 +11,13 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from functools import cached_property
 from operator import attrgetter
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 
 from ..errors import ConfigurationError
-from ..robot import JointKind, Robot
+from ..model.joints import JointKind
+from ..model.robot import Robot
 from ..validate import float_copy
 from . import blocks as B
 from .kernels import population_cost, population_values, task_errors_at
@@ -25,8 +26,27 @@ if TYPE_CHECKING:  # pragma: no cover
     from .kinds import BlockKind
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..hulls import HullPair
-    from .base import Objective, Term
+    from ..geometry.hulls import HullPair
+
+
+class Term(Protocol):
+    """What a program reads of a term (:class:`~framework.costs.base.Term`, which imports this module)."""
+
+    name: str
+    level: str
+    frames: tuple[str, ...]
+    version: int
+
+    def layout_key(self, robot: Robot) -> tuple: ...
+    def packed(self, robot: Robot) -> tuple[tuple[Block, ...] | None, tuple | None]: ...
+    def parameters(self, robot: Robot) -> np.ndarray: ...
+    def value(self, robot: Robot, X: np.ndarray, poses=None) -> np.ndarray: ...
+
+
+class Objective(Protocol):
+    """What a program reads of an objective (:class:`~framework.costs.base.Objective`): its weighted terms."""
+
+    terms: tuple[tuple[float, Term], ...]
 
 _VERSION = attrgetter("version")
 _LEVELS = {"value": B.LEVEL_VALUE, "task": B.LEVEL_TASK, "regularizer": B.LEVEL_REGULARIZER}

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..native import matrix
-from ..robot import Robot
+from ..compiled.native import matrix
+from ..model.robot import Robot
 from . import blocks as B
 from .base import Term, TermEntry
 from .kinds import BlockKind

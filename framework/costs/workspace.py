@@ -16,7 +16,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..native import address_of, internal, view
+from ..compiled.native import address_of, internal, view
 from .blocks import BLOCK
 
 i8 = np.int64
@@ -60,7 +60,7 @@ class Views(NamedTuple):
 
 
 class KinematicViews(NamedTuple):
-    """A workspace's kinematic tables and kinematic scratch (see :mod:`framework.kinematics`)."""
+    """A workspace's kinematic tables and kinematic scratch (see :mod:`framework.model.kinematics`)."""
 
     joints: np.ndarray
     joint_geometry: np.ndarray

@@ -6,7 +6,7 @@ from __future__ import annotations
 from ..costs.kernels import JACOBIANS_FROM_POSES, NO, REUSE, TASK, YES, linearize
 from ..costs.lie import wrap_angle
 from ..costs.workspace import views
-from ..native import internal
+from ..compiled.native import internal
 
 #: Blocking contact rows that stop a step are linearized again at ``x`` when their gap there is below this [m]
 #: (the gap and the closest pair's Jacobian: :func:`~framework.costs.kernels.widen_margins`); the others are let go.

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..costs.kernels import NO
 from ..costs.program import Program
-from ..native import compiled
+from ..compiled.native import compiled
 from . import regularize as newton_phase
 from .clock import monotonic_ns
 from .local import LocalSettings, search_box

@@ -17,7 +17,7 @@ from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from ..native import internal
+from ..compiled.native import internal
 
 #: ``CLOCK_MONOTONIC`` of the C library (Linux 1, macOS 6).
 _CLOCK_MONOTONIC = 6 if sys.platform == "darwin" else 1

@@ -12,7 +12,7 @@ import numpy as np
 from ..costs.blocks import UNIT_ROWS, in_level, rho_derivatives, rho_value
 from ..costs.kernels import COMPUTE, YES, linearize
 from ..costs.workspace import views, workspaces
-from ..native import call, compiled, internal, keep_alive
+from ..compiled.native import call, compiled, internal, keep_alive
 from .tables import max_rows
 
 #: States of a regularizer block in the Newton phase: free, held at zero, kicked off it (one step), released

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..costs.blocks import LEVEL_REGULARIZER, NORM
-from ..native import internal
+from ..compiled.native import internal
 from .derivatives import FREE, HELD, KICKED, RELEASED, is_held
 from .steps import squared_norm
 

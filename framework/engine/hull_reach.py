@@ -1,5 +1,5 @@
 """The engine's last steps for collision terms: Levenberg-Marquardt on the task with every pair a collision term
-keeps apart measured between convex hulls (:mod:`framework.hulls`) instead of sphere covers.
+keeps apart measured between convex hulls (:mod:`framework.geometry.hulls`) instead of sphere covers.
 
 Run when the compiled engine ends short of the task with collision rows active: the sphere model, fatter than the
 links, may leave no room where the links have some (a hand a few millimetres above a table). A Python loop, for
@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..costs import Objective, Program
-from ..hulls import HullPair
+from ..geometry.hulls import HullPair
 from .local import LocalResult, LocalSettings, project_into_box, residuals, search_box
 
 #: Distance kept beyond the margin [m]: a hull pair exactly at the margin reads as touching in coal's check.

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..native import internal
+from ..compiled.native import internal
 
 
 @internal(inline=True)

@@ -21,8 +21,8 @@ from ..costs.blocks import LEVEL_REGULARIZER, LEVEL_TASK
 from ..costs.kernels import residuals_at
 from ..costs.program import Program
 from ..errors import SolverError
-from ..native import compiled_entry
-from ..parallel_compile import entry_points
+from ..compiled.native import compiled_entry
+from ..compiled.parallel import entry_points
 from ..validate import float_copy
 from . import regularize as newton_phase
 from .derivatives import derivatives_at
@@ -160,7 +160,7 @@ def solve_local(
     """Reach the task from ``x0`` (restarting from uniform random configurations), then regularize on it.
 
     Args:
-        program: the packed problem (:attr:`framework.problem.Problem.program`).
+        program: the packed problem (:attr:`framework.costs.problem.Problem.program`).
         x0: ``(n,)`` first start (float64); ``None``: drawn from ``rng`` as the restarts draw theirs (uniformly in
             the box, again while in contact, up to :data:`~framework.engine.reach.CLEAR_DRAWS` draws).
         rng: the restart configurations' stream (:func:`~framework.engine.draws.stream`, advanced in place, so
@@ -219,7 +219,7 @@ def prepare(program: Program) -> None:
     """Load the engine's compiled code for ``program``'s layout, so that a time budget that starts after this is
     not spent on it: numba loads the code from its disk cache (about half a second for the engine) or compiles it
     (seconds, once per install: the reach loop here, the Newton phase beside it in a helper process,
-    :mod:`framework.parallel_compile`) on a process's first call. Once per layout; then a dictionary lookup."""
+    :mod:`framework.compiled.parallel`) on a process's first call. Once per layout; then a dictionary lookup."""
     entries = program.layout.entries
     if prepare in entries:
         return
@@ -248,7 +248,7 @@ _STATUS = {ITERATIONS: "max_iterations", DEADLINE: "time_budget", STARTS: "max_i
 
 def _entry(program: Program, kernel, args: tuple):
     """``kernel``'s compiled entry point for :func:`solve_local`'s ``args`` on ``program``, resolved once per layout
-    (:func:`~framework.native.compiled_entry`): the types of those arguments are fixed by the layout (its
+    (:func:`~framework.compiled.native.compiled_entry`): the types of those arguments are fixed by the layout (its
     robot's box, its packed arrays) and by :func:`solve_local` itself (a float start of shape ``(n,)``, a stream,
     the outputs it makes, :class:`LocalSettings`' plain numbers)."""
     entries = program.layout.entries

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, REGULARIZERS, REUSE, TASK, YES, level_value, linearize
 from ..costs.workspace import views
-from ..native import internal
+from ..compiled.native import internal
 from .active_set import blocking_at_x, boundary_fraction, entered, moved
 from .holds import kick_due, release_kicked
 from .newton_state import (BAND_ROWS, BOUNDARY_MAX, BOUNDARY_MIN, CONVERGED, CUR, GO_ON, KINK_FAILURES, LINE_SEARCH,

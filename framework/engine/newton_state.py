@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..costs.blocks import BLOCK
-from ..native import internal, view
+from ..compiled.native import internal, view
 from .restore import RestoreScratch
 from .tangent import tangent_scratch
 

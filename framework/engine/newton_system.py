@@ -8,7 +8,7 @@ import numpy as np
 
 from ..costs.blocks import LEVEL_TASK
 from ..costs.workspace import views
-from ..native import internal, matrix, square
+from ..compiled.native import internal, matrix, square
 from .active_set import active_rows
 from .derivatives import KICKED, add_curvature, is_held
 from .holds import held_rows, moving_rows, release_holds

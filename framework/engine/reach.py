@@ -47,7 +47,7 @@ from ..costs.blocks import LEVEL_REGULARIZER
 from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, TASK, YES, hinges_clear, linearize, task_errors,
                              term_values, within_tolerance)
 from ..costs.workspace import views, workspaces
-from ..native import address_of, compiled, internal, keep_alive, matrix, take
+from ..compiled.native import address_of, compiled, internal, keep_alive, matrix, take
 from .clock import monotonic_ns
 from .draws import uniform_in_box
 from .steps import bounded_step, copy, gain_factor, project, projected_step, squared_entries, squared_norm
@@ -106,7 +106,7 @@ class Scratch(NamedTuple):
 @internal
 def scratch(at, n, full):
     """:class:`Scratch` for ``n`` coordinates and ``full`` task rows laid out from address ``at``, and the address
-    after it (:func:`~framework.native.take`)."""
+    after it (:func:`~framework.compiled.native.take`)."""
     k = min(full, n)
     A, at = take(at, k * k)
     L, at = take(at, k * k)

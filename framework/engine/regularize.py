@@ -42,7 +42,7 @@ import numpy as np
 from ..costs.kernels import (COMPUTE, JACOBIANS_FROM_POSES, NO, REGULARIZERS, REUSE, TASK, YES, level_value,
                              linearize, task_errors, term_values, widen_margins)
 from ..costs.workspace import WORKSPACE, views, workspaces
-from ..native import address_of, compiled, internal, keep_alive, square, view
+from ..compiled.native import address_of, compiled, internal, keep_alive, square, view
 from .active_set import BAND, active_rows
 from .clock import monotonic_ns
 from .derivatives import objective_derivatives
@@ -107,7 +107,7 @@ def regularize(x, box, packed, settings, multipliers_out, report) -> int:
 
 def parts(x, box, packed, settings, multipliers_out, report) -> list[tuple[object, tuple]]:
     """``(function, args)`` of the large callees of :func:`regularize` for its arguments, the largest first (for
-    :func:`framework.parallel_compile.entry_points`): arguments of the types regularize passes them."""
+    :func:`framework.compiled.parallel.entry_points`): arguments of the types regularize passes them."""
     W, st = np.zeros(5, dtype=WORKSPACE), np.zeros(1, dtype=NEWTON)[0]
     rows_ = np.zeros(0, dtype=np.bool_)
     return [(_iteration, (x, box, W, st, settings.smoothing)),

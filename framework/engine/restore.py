@@ -8,7 +8,7 @@ import numpy as np
 
 from ..costs.kernels import COMPUTE, JACOBIANS_FROM_POSES, NO, REUSE, TASK, YES, linearize
 from ..costs.workspace import views
-from ..native import internal, matrix
+from ..compiled.native import internal, matrix
 from .steps import bounded_step, copy, project, squared_norm
 from .tables import set_aside_clear
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..native import internal, square
+from ..compiled.native import internal, square
 from .linalg import least_norm_step, levenberg_marquardt_step, moving_columns, moving_columns_step
 
 #: ``μ``'s smallest factor after an accepted step (Nielsen's rule; see :mod:`~framework.engine.reach`).

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..costs.blocks import CONTACT, HINGE, LEVEL_TASK, LEVEL_VALUE, in_level
 from ..costs.kernels import rows_clear
-from ..native import internal
+from ..compiled.native import internal
 
 
 @internal

@@ -7,7 +7,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..native import internal, square, take
+from ..compiled.native import internal, square, take
 from .linalg import cholesky_solve, gram, null_space, symmetric_eigen, trust_region_step
 
 

@@ -12,7 +12,7 @@ import numpy as np
 from ..costs.blocks import HALFSIN, LEVEL_TASK, NORM
 from ..costs.kernels import COMPUTE, TASK_AND_REGULARIZERS, YES, level_value, linearize
 from ..costs.workspace import workspaces
-from ..native import compiled, internal, keep_alive, matrix
+from ..compiled.native import compiled, internal, keep_alive, matrix
 from .clock import monotonic_ns
 from .derivatives import objective_derivatives
 from .linalg import cholesky_solve

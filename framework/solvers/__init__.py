@@ -1,47 +1,25 @@
-"""Robot-independent optimizers: ``minimize(cost, box, solver=..., rng=...)`` over a population cost.
+"""IK solvers on a :class:`~framework.costs.problem.Problem`: the interface (``Request`` -> ``Outcome``), their
+registry, the engine-based solvers (``hybrid``, ``multistart_lm``), every optimizer as an IK solver, the Jacobian
+baselines and M-FABRIK; ``solve`` and ``solve_batch``.
 
-Every solver is one module registered by name; adding one is a new module plus its name in the
-import list below (importing a module registers its solver).
+Adding a solver is one new module registered with ``@register_ik("name")`` plus its import line below.
 """
 
-from framework.solvers import (  # noqa: F401
-    cmaes,
-    cmaes_fast,
-    cpabc,
-    cs,
-    de,
-    dempso,
-    hbbo,
-    ica,
-    impso,
-    itlbo,
-    pso,
-    qpso,
-    sca,
-    sde,
-    tlbo,
-    woa,
-)
-from framework.solvers import hybrid, multistart  # noqa: F401  (IK solvers on the local engine)
-from framework.solvers.base import Algorithm, Box, OptimizeResult, minimize, repair
-from framework.solvers.ik import IKSolver, Outcome, Request
-from framework.solvers.registry import (
-    IK_SOLVERS,
-    SOLVERS,
-    available_solvers,
-    get_solver,
-    ik_solver,
-    register,
-    register_ik,
-    solver_names,
-)
+from .. import optimizers  # noqa: F401  (registers the algorithms every IK solver name may also be)
+from . import hybrid, multistart  # noqa: F401  (IK solvers on the local engine)
+from .baselines import solver as _jacobian_solvers  # noqa: F401  registers "pinv" and "dls" (papers 001, 003)
+from .fabrik import solver as _mfabrik_solver  # noqa: F401  registers "mfabrik" (paper 003)
+from ..optimizers import Algorithm, Box, OptimizeResult, available_solvers, get_solver, minimize, register, repair
+from ..optimizers.registry import ALGORITHMS
+from .ik import IKSolver, Outcome, Request
+from .registry import IK_SOLVERS, ik_solver, register_ik, solver_names
 
 __all__ = [
+    "ALGORITHMS",
     "IKSolver",
     "IK_SOLVERS",
     "Outcome",
     "Request",
-    "SOLVERS",
     "ik_solver",
     "register_ik",
     "solver_names",

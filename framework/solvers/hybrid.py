@@ -42,7 +42,11 @@ from ..engine import LocalResult, LocalSettings, minimize_sum, minimize_weighted
 from ..engine import prepare as prepare_engine
 from ..engine.hull_reach import blocked_by_spheres, hull_reach
 from ..engine.draws import stream
-from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
+from .ik import BatchPlan, IKSolver, Outcome, Request
+from ..errors import SolverError
+from ..optimizers.base import resolve_options
+from ..optimizers.registry import get_solver
+from ..validate import positive_int
 from .metaheuristic import compiled_or_loop, shared_loop, within
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
@@ -89,6 +93,15 @@ class HybridOptions:
         # stored as the ints they were checked to be (an integral float such as 8.0 is a valid count)
         object.__setattr__(self, "stall", positive_int(self.stall, "hybrid option stall"))
         object.__setattr__(self, "polish", positive_int(self.polish, "hybrid option polish", minimum=0))
+        for flag in ("warm_start", "restarts", "regularize"):
+            if not isinstance(getattr(self, flag), bool):
+                raise SolverError(f"hybrid option {flag} must be true or false; got {getattr(self, flag)!r}")
+        if not isinstance(self.global_solver, str):
+            raise SolverError(f"hybrid option global_solver must be a metaheuristic's name; got {self.global_solver!r}")
+        if self.global_options is not None and not isinstance(self.global_options, Mapping):
+            raise SolverError(f"hybrid option global_options must be a table of options; got {self.global_options!r}")
+        algorithm = get_solver(self.global_solver)  # an unknown name raises, listing the known ones
+        resolve_options(self.global_solver, algorithm.DEFAULTS, self.global_options)
 
 
 @register_ik("hybrid")
@@ -206,13 +219,6 @@ class Hybrid(IKSolver):
             history.extend(run.history.tolist())
             return run.x
 
-        def better(a, b):  # the engine result that reaches the task, else the lower cost (``a`` may be None)
-            if a is None:
-                return b
-            if a.reached != b.reached:
-                return a if a.reached else b
-            return min((a, b), key=lambda c: float(problem.cost(c.x)[0]))
-
         hull_runs: list = []  # each run of the hull steps (its LocalResult)
 
         def hulls(result):  # the sphere rows kept it from the task: the last steps on the links' convex hulls
@@ -265,27 +271,17 @@ class Hybrid(IKSolver):
                     found, check, reached = clear_first(None, settings)
                     if found is not None or not reached or request.time_left() <= 0:
                         break
-                best = found if found is not None else better(best, hulls(engine(None)))  # a drawn start
+                best = found if found is not None else _better(problem, best, hulls(engine(None)))  # a drawn start
         if not best.reached and o.global_iterations is None and request.time_left() > 0:
             escalated = True  # the warm start's basin misses the task: the global phase from a uniform start
             cold = hulls(engine(global_phase(None, GLOBAL_ITERATIONS)))
-            best = better(best, cold)
+            best = _better(problem, best, cold)
         x, errors, values, weighted = best.x, best.task_errors, best.values, False
         if not problem.priorities and (not best.reached or not reaching_is_optimal(problem.program, x,
                                                                                   best.multipliers)):
-            # the weighted sum decides: reaching costs more than it gains, or the task is out of reach
-            weighted = True
-            points = [x]
-            if best.reached:  # release the task terms that do not pay for themselves
-                y, spent = minimize_weighted(problem.program, x, best.multipliers, settings, deadline=request.deadline)
-                evaluations += spent
-                points.append(y)
-            for origin in (x, x0) if not best.reached else (x0,):  # damped Newton on the whole sum
-                z, _, more = minimize_sum(problem.program, origin, settings, deadline=request.deadline)
-                z, last = minimize_weighted(problem.program, z, None, settings, deadline=request.deadline)
-                evaluations += more + last
-                points.append(z)
-            x, errors, values = points[int(np.argmin(problem.cost(np.array(points))))], None, None
+            weighted = True  # the weighted sum decides: reaching costs more than it gains, or the task is out of reach
+            x, spent = _weighted_answer(problem, best, x0, settings, request.deadline)
+            errors, values, evaluations = None, None, evaluations + spent
             counter.report(x)
         stop = stop_reason(within(problem, x, request) if errors is None else best.reached, request)
         report = self._report(start, budget, restarts, best.regularized, request, escalated=escalated,
@@ -293,6 +289,33 @@ class Hybrid(IKSolver):
                               on_hulls=any(best is r for r in hull_runs), clear_first=check is not None)
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values, collisions=check)  # check: made at x, when made
+
+
+def _better(problem, a: LocalResult | None, b: LocalResult) -> LocalResult:
+    """The engine result that reaches the task, else the one of lower cost (``a`` may be None)."""
+    if a is None:
+        return b
+    if a.reached != b.reached:
+        return a if a.reached else b
+    return min((a, b), key=lambda c: float(problem.cost(c.x)[0]))
+
+
+def _weighted_answer(problem, best: LocalResult, x0: np.ndarray, settings: LocalSettings,
+                     deadline: float | None) -> tuple[np.ndarray, int]:
+    """When the weighted sum decides: the lowest cost among the engine's answer, that answer with the task terms
+    that do not pay for themselves released, and damped Newton on the whole sum (from the answer when it missed
+    the task, and from ``x0``); with the evaluations spent."""
+    points, spent = [best.x], 0
+    if best.reached:  # release the task terms that do not pay for themselves
+        y, more = minimize_weighted(problem.program, best.x, best.multipliers, settings, deadline=deadline)
+        spent += more
+        points.append(y)
+    for origin in (best.x, x0) if not best.reached else (x0,):  # damped Newton on the whole sum
+        z, _, more = minimize_sum(problem.program, origin, settings, deadline=deadline)
+        z, last = minimize_weighted(problem.program, z, None, settings, deadline=deadline)
+        spent += more + last
+        points.append(z)
+    return points[int(np.argmin(problem.cost(np.array(points))))], spent
 
 
 class _Counter:

@@ -2,7 +2,7 @@
 
 :func:`framework.solve` builds a :class:`Request` from its arguments, looks the solver up by name
 (:func:`~framework.solvers.registry.ik_solver`) and turns the :class:`Outcome` into an
-:class:`~framework.solve.IKResult`. A solver declares what it can take as class attributes (a warm start, a
+:class:`~framework.solvers.solve.IKResult`. A solver declares what it can take as class attributes (a warm start, a
 search distribution carried along a path, Jacobians), so callers never branch on solver names. Options are a
 frozen dataclass per solver (:attr:`IKSolver.Options`): typed, documented, with defaults; unknown names are
 an error.
@@ -23,7 +23,7 @@ from ..errors import SolverError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import LocalSettings
-    from ..problem import Problem
+    from ..costs.problem import Problem
 
 Callback = Callable[[int, float, np.ndarray], "bool | None"]
 
@@ -179,13 +179,3 @@ def parse_options(options_type: type, options: Mapping[str, Any] | None, solver:
     return options_type(**options)
 
 
-def positive_int(value: Any, what: str, *, minimum: int = 1, maximum: int | None = None) -> int:
-    """``value`` as an int in ``[minimum, maximum]``; raises :class:`SolverError` naming ``what``."""
-    if type(value) is int and value >= minimum and (maximum is None or value <= maximum):  # the common case
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer, float, np.floating)) \
-            or not np.isfinite(value) or value != int(value) or int(value) < minimum:
-        raise SolverError(f"{what} must be an integer >= {minimum}; got {value!r}")
-    if maximum is not None and int(value) > maximum:
-        raise SolverError(f"{what} must be at most {maximum:,}; got {int(value):,}")
-    return int(value)

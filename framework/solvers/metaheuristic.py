@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import SolverError
-from .base import Box, OptimizeResult, minimize
+from ..optimizers.base import Box, OptimizeResult, minimize, resolve_options
 from .ik import IKSolver, Outcome, Request
-from .registry import get_solver
+from ..optimizers.registry import get_solver
 
 #: Generations of a metaheuristic when ``solve`` is not given a budget (the papers' 1000).
 DEFAULT_ITERATIONS = 1000
@@ -32,7 +32,7 @@ RANKINGS = ("auto", "weighted", "feasibility")
 
 
 class Metaheuristic(IKSolver):
-    """A registered population algorithm (:class:`~framework.solvers.base.Algorithm`) minimizing the problem's
+    """A registered population algorithm (:class:`~framework.optimizers.base.Algorithm`) minimizing the problem's
     weighted cost over the search box. Its options are the algorithm's ``DEFAULTS`` (a mapping)."""
 
     kind = "metaheuristic"
@@ -46,6 +46,7 @@ class Metaheuristic(IKSolver):
         self.carries_distribution = "covariance" in cls.DEFAULTS
         self.step_option = "sigma0" if "sigma0" in cls.DEFAULTS else None
         self.options = dict(options or {})
+        resolve_options(name, self.defaults(), self.options)  # names and kinds checked once, here
 
     def defaults(self) -> dict[str, Any]:  # type: ignore[override]
         return {**get_solver(self.algorithm).DEFAULTS, "ranking": "auto"}
@@ -125,7 +126,7 @@ def shared_loop(name: str, problem, request: Request, iterations: int, options: 
                 callback: Callable | None = None, progress: bool = False,
                 cost: Callable[[np.ndarray], np.ndarray] | None = None) -> OptimizeResult:
     """``iterations`` generations of the metaheuristic ``name`` on the problem's population cost (or ``cost``),
-    in the shared ask/tell loop (:func:`~framework.solvers.base.minimize`), from the request's warm starts and
+    in the shared ask/tell loop (:func:`~framework.optimizers.base.minimize`), from the request's warm starts and
     generator."""
     return minimize(cost or problem.cost, (problem.robot.lower, problem.robot.upper), solver=name, rng=request.rng(),
                     max_iterations=iterations, population=request.population, initial=request.initial,
@@ -135,7 +136,7 @@ def shared_loop(name: str, problem, request: Request, iterations: int, options: 
 def compiled_or_loop(name: str, problem, request: Request, iterations: int, options: dict) -> OptimizeResult:
     """``iterations`` generations of the metaheuristic ``name`` on the problem, with nothing to call between
     them: its compiled loop on the problem's packed terms if it has one (the same generations as
-    :func:`~framework.solvers.base.minimize`), else the shared loop."""
+    :func:`~framework.optimizers.base.minimize`), else the shared loop."""
     cls = get_solver(name)
     if not hasattr(cls, "run_compiled") or problem.program.layout.generic:
         return shared_loop(name, problem, request, iterations, options)

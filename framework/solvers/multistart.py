@@ -16,7 +16,8 @@ import numpy as np
 
 from ..engine import LocalSettings, solve_local
 from ..engine import prepare as prepare_engine
-from .ik import BatchPlan, IKSolver, Outcome, Request, positive_int
+from .ik import BatchPlan, IKSolver, Outcome, Request
+from ..validate import positive_int
 from .registry import register_ik
 
 #: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is given neither an iteration nor a time budget.
@@ -56,7 +57,7 @@ def default_iterations(request: Request) -> int:
 
 def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
     """The first start and where it came from: ``initial``, the regularizers' reference
-    (:attr:`~framework.problem.Problem.previous`), or the box middle (the robot's own, read-only: the engine
+    (:attr:`~framework.costs.problem.Problem.previous`), or the box middle (the robot's own, read-only: the engine
     copies its start)."""
     if request.initial is not None:
         return request.initial[0].copy(), "initial"

@@ -1,25 +1,21 @@
-"""Solver registry: metaheuristics (name -> :class:`~framework.solvers.base.Algorithm` subclass, minimizing a
-population cost) and IK solvers (name -> :class:`~framework.solvers.ik.IKSolver` subclass, solving a problem).
+"""The IK solvers' registry: name -> :class:`~framework.solvers.ik.IKSolver` subclass, solving a problem.
 
-Adding a solver is one new module whose class is decorated with ``@register("name")`` (a metaheuristic) or
-``@register_ik("name")`` plus one import line in ``framework/solvers/__init__.py``. Every metaheuristic is also
-an IK solver (:class:`~framework.solvers.metaheuristic.Metaheuristic`).
+Adding an IK solver is one new module whose class is decorated with ``@register_ik("name")`` plus one import line in
+``framework/solvers/__init__.py``. Every algorithm of the optimizers' registry (:mod:`framework.optimizers.registry`)
+is an IK solver too (:class:`~framework.solvers.metaheuristic.Metaheuristic`); the two share one name space.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
-from framework.errors import SolverError
+from ..errors import SolverError
+from ..optimizers.registry import ALGORITHMS, reserve
+from .metaheuristic import Metaheuristic
 
-if TYPE_CHECKING:
-    from framework.solvers.base import Algorithm
+A = TypeVar("A", bound=type)
 
-A = TypeVar("A", bound="type[Algorithm]")
-
-#: Registered solvers, name -> algorithm class.
-SOLVERS: dict[str, type[Algorithm]] = {}
 #: Registered problem-level IK solvers, name -> class.
 IK_SOLVERS: dict[str, type] = {}
 #: IK solver instances by name and options (:func:`ik_solver`): a solver keeps no state between solves, only tables
@@ -29,46 +25,22 @@ _INSTANCES: dict[tuple, object] = {}
 _MAX_INSTANCES = 256
 
 
-def _registrar(table: dict, name: str) -> Callable[[A], A]:
-    """A class decorator adding a class to ``table`` under ``name``: one name space over both tables."""
+def register_ik(name: str) -> Callable[[A], A]:
+    """Class decorator registering an :class:`~framework.solvers.ik.IKSolver` under ``name`` (also sets its
+    ``name`` attribute); a name the optimizers' registry holds is refused."""
 
     def decorate(cls: A) -> A:
-        for known in (SOLVERS, IK_SOLVERS):
-            if name in known and known[name] is not cls:
-                raise SolverError(f"Solver name {name!r} is already registered by {known[name].__name__}.")
+        reserve(name, cls)
         cls.name = name
-        table[name] = cls
+        IK_SOLVERS[name] = cls
         return cls
 
     return decorate
 
 
-def register(name: str) -> Callable[[A], A]:
-    """Class decorator registering an algorithm under ``name`` (also sets its ``name`` attribute)."""
-    return _registrar(SOLVERS, name)
-
-
-def available_solvers() -> list[str]:
-    """Sorted names of the registered solvers."""
-    return sorted(SOLVERS)
-
-
-def get_solver(name: str) -> type[Algorithm]:
-    """The algorithm class registered under ``name``; raises :class:`SolverError` listing the known names."""
-    try:
-        return SOLVERS[name]
-    except (KeyError, TypeError):
-        raise SolverError(f"Unknown solver {name!r}; available solvers: {available_solvers()}.") from None
-
-
-def register_ik(name: str) -> Callable[[A], A]:
-    """Class decorator registering an :class:`~framework.solvers.ik.IKSolver` under ``name``."""
-    return _registrar(IK_SOLVERS, name)
-
-
 def solver_names() -> list[str]:
     """Every name :func:`framework.solve` accepts: the IK solvers, then the metaheuristics."""
-    return sorted(IK_SOLVERS) + sorted(SOLVERS)
+    return sorted(IK_SOLVERS) + sorted(ALGORITHMS)
 
 
 def ik_solver(name: str, options=None):
@@ -85,9 +57,7 @@ def ik_solver(name: str, options=None):
                     _INSTANCES.clear()
                 _INSTANCES[key] = made
         return made
-    if name in SOLVERS:
-        from .metaheuristic import Metaheuristic
-
+    if name in ALGORITHMS:
         return Metaheuristic(name, options)
     raise SolverError(f"unknown solver {name!r}; available: {', '.join(solver_names())}")
 

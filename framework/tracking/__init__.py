@@ -9,7 +9,7 @@ pass any callable ``builder(k, position, rotation, previous) -> Objective``::
 
     task = TrackingTask(frame="arm1_ee", follower="arm2_ee", offset=(0.2, -0.3, -0.2), position_weight=1.2,
                         motion={"base": 0.1, "arm1": 0.4, "arm2": 0.4})          # paper 000 eq. 11
-    result = track(robot, paper000("circular"), task, solver="cmaes_fast", iterations_per_point=300, initial=q0)
+    result = track(robot, paper000("circular"), task, solver="cmaes_fast", max_iterations=300, initial=q0)
     result.position_error.mean(), result.smoothness(robot).max_step["arm1"]
 
 Warm start: the previous solution seeds each solve (the local engine's start, CMA-ES mean, first population
@@ -22,8 +22,12 @@ A :class:`TrackingTask` builds its problem once and moves its targets in place a
 path (``path_parameters(problem, trajectory)``: :class:`TrackingTask`, a task file's terms) tracked by a solver
 that starts from the previous solution (``hybrid``, ``multistart_lm``) runs the waypoints its local engine answers
 in compiled stretches (:mod:`~framework.tracking.chain`), with the answers one solve per waypoint gives.
+
+Paths as data: :mod:`~framework.tracking.trajectory`. The papers' Jacobian baselines along a path:
+:func:`jacobian_track`, :func:`relative_jacobian_track` (:mod:`~framework.tracking.jacobian_paths`).
 """
 
+from .jacobian_paths import jacobian_track, relative_jacobian_track
 from .loop import continued, track
 from .metrics import Smoothness, TrackingResult, joint_steps, waypoint_errors
 from .progress import Progress
@@ -33,4 +37,5 @@ from .warm import PREDICTOR, predictor, task_covariance
 
 __all__ = ["CONTINUED_SIGMA0", "COORDINATIONS", "FIRST_GLOBAL_ITERATIONS", "FIRST_SIGMA0", "PREDICTOR", "Progress",
            "Smoothness", "TASK_SPACE_RATIO", "TaskBuilder", "TrackingCallback", "TrackingResult", "TrackingTask",
-           "continued", "joint_steps", "predictor", "task_covariance", "track", "waypoint_errors"]
+           "continued", "jacobian_track", "joint_steps", "predictor", "relative_jacobian_track", "task_covariance", "track",
+           "waypoint_errors"]

@@ -8,7 +8,7 @@ Python solve, its checks and its result per waypoint (about half a waypoint's ti
 at the first waypoint the engine misses; the tracking loop solves that one with the solver itself (its global
 phase), then goes on chained.
 
-Each waypoint's answer is the one :func:`~framework.solve.solve` gives it (the same compiled descent from the same
+Each waypoint's answer is the one :func:`~framework.solvers.solve.solve` gives it (the same compiled descent from the same
 start and parameters), and the seed generator advances as one solve per waypoint advances it, so the waypoints a
 solve falls back to draw what they would have drawn: a path's answers do not depend on where the stretches break.
 """
@@ -21,8 +21,8 @@ import numpy as np
 
 from ..engine.batch import CHUNK, BatchState, follow_items
 from ..engine.local import regularized_status
-from ..problem import Problem
-from ..solve import IKResult, result_of
+from ..costs.problem import Problem
+from ..solvers.solve import IKResult, result_of
 from ..solvers import IKSolver, Outcome, Request
 
 
@@ -84,7 +84,7 @@ class Chain:
         rng.integers(0, 2**63, size=count)
 
     def _result(self, i: int) -> IKResult:
-        """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solve.solve` makes it (the
+        """Waypoint ``i``'s result (the engine reached its task), as :func:`~framework.solvers.solve.solve` makes it (the
         exact collision check included, when the problem has collision terms)."""
         state = self.state
         settings = {**self.plan.report, "restart_count": int(state.counts[i, 2]),

@@ -11,11 +11,12 @@ import numpy as np
 
 from ..costs import Objective
 from ..errors import TaskError
-from ..problem import Problem
-from ..robot import Robot
-from ..solve import IKResult, make_request, solve
+from ..costs.problem import Problem
+from ..model.robot import Robot
+from ..solvers.settings import DEFAULTS
+from ..solvers.solve import IKResult, check_settings, make_request, solve
 from ..solvers import IKSolver, ik_solver
-from ..trajectory import Trajectory
+from .trajectory import Trajectory
 from .chain import Chain
 from .metrics import TrackingResult, waypoint_errors
 from .progress import Progress
@@ -36,33 +37,35 @@ def track(
     trajectory: Trajectory,
     task: TrackingTask | TaskBuilder | None = None,
     *,
-    solver: str = "hybrid",
-    seed: int | np.random.Generator = 0,
-    iterations_per_point: int = 300,
-    population: int = 30,
+    solver: str = DEFAULTS.solver,
+    seed: int | np.random.Generator = DEFAULTS.seed,
+    tolerance: float = DEFAULTS.tolerance,
+    angle_tolerance: float | None = DEFAULTS.angle_tolerance,
+    time_budget: float | None = DEFAULTS.time_budget,
+    max_iterations: int | None = DEFAULTS.max_iterations,
+    population: int = DEFAULTS.population,
+    stop_at_tolerance: bool = DEFAULTS.stop_at_tolerance,
+    options: Mapping[str, Any] | None = DEFAULTS.options,
     initial: np.ndarray | None = None,
     warm_start: bool = True,
     warm_spread: float = 0.02,
     predict: bool | None = None,
-    tolerance: float = 1e-4,
-    stop_at_tolerance: bool = False,
     bounds: str = "resample",
     priorities: bool = True,
-    options: Mapping[str, Any] | None = None,
     progress: bool | None = None,
     callback: TrackingCallback | None = None,
 ) -> TrackingResult:
-    """Track ``trajectory`` with ``robot``: one :func:`~framework.solve.solve` per waypoint.
+    """Track ``trajectory`` with ``robot``: one :func:`~framework.solve` per waypoint.
 
     Args:
         robot: any robot.
         trajectory: the waypoints (positions, optional orientations) for the tracking frame.
         task: a :class:`TrackingTask`, a builder ``(k, position, rotation, previous) -> Objective``, or ``None``
             (the first end-effector follows the path, motion weight 0.1 on all joints).
-        solver: ``"hybrid"``, ``"multistart_lm"`` or a registered metaheuristic.
-        seed: seed or generator; one generator runs through all waypoints, so runs are reproducible.
-        iterations_per_point: iteration budget of each solve (300 in paper 000; 500 in paper 002).
-        population: population size of each solve.
+        solver, seed, tolerance, angle_tolerance, stop_at_tolerance, options: as :func:`~framework.solve`, for
+            every waypoint (one generator runs through all waypoints, so runs are reproducible).
+        time_budget, max_iterations, population: as :func:`~framework.solve`, per waypoint (paper 000 runs 300
+            iterations per waypoint, paper 002 500).
         initial: ``(n,)`` configuration before the first waypoint (paper 000's ``q_prev``): the first motion
             reference and warm start. Default: the centre of the search box.
         warm_start: seed each solve with the previous solution (``False``: cold starts, as in the papers).
@@ -72,127 +75,134 @@ def track(
             solution (CMA-ES mean / one member) with the solver's default spread.
         predict: add the engine's predictor to the warm start (default: for solvers that continue their search
             distribution; local solvers start from the previous solution). ``cmaes_fast`` warm-started with the
-            predictor continues from
-            the previous waypoint's distribution: mean at the prediction, its adapted covariance
-            (:attr:`~framework.solve.IKResult.state`, see :func:`continued`) and ``sigma0 =``
+            predictor continues from the previous waypoint's distribution: mean at the prediction, its adapted
+            covariance (:attr:`~framework.solvers.solve.IKResult.state`, see :func:`continued`) and ``sigma0 =``
             :data:`CONTINUED_SIGMA0`; at the first waypoint, :func:`task_covariance` and :data:`FIRST_SIGMA0`
             (``options`` override both; ``predict=False`` falls back to ``warm_spread``).
-        tolerance: a waypoint succeeds if every task term is within this [m, or rad for orientations].
-        stop_at_tolerance: stop each solve as soon as the task error is within ``tolerance``.
-        bounds: ``"resample"``, ``"clip"`` or ``"penalty"`` (see :class:`~framework.problem.Problem`).
-        priorities: task terms first (default) or the weighted sum as it stands (the papers), see
-            :class:`~framework.problem.Problem`.
-        options: solver options (a solver with a global phase, the hybrid, runs :data:`FIRST_GLOBAL_ITERATIONS`
-            generations of it at the first waypoint unless ``options`` set them).
+        bounds, priorities: as :class:`~framework.costs.problem.Problem`.
         progress: show a progress bar (``None``: only on a terminal).
         callback: ``callback(k, ik_result)`` after each waypoint; returning True stops early.
+
+    A solver with a global phase (the hybrid) runs :data:`FIRST_GLOBAL_ITERATIONS` generations of it at the first
+    waypoint unless ``options`` set them.
 
     Returns:
         A :class:`TrackingResult`. Ctrl-C stops cleanly: the waypoints done are kept
         (``stop_reason == "interrupted"``).
 
     Raises:
-        TaskError: bad task or weights; ConfigurationError: ``initial`` of the wrong shape or not finite.
+        TaskError: bad task or weights; ConfigurationError: ``initial`` of the wrong shape or not finite;
+        SolverError: a bad setting, named.
     """
     if not isinstance(trajectory, Trajectory):
-        raise TaskError(f"track() needs a framework.trajectory.Trajectory; got {type(trajectory).__name__}")
-    if int(iterations_per_point) != iterations_per_point or iterations_per_point < 1:
-        raise TaskError(f"iterations_per_point must be a positive integer; got {iterations_per_point!r}")
-    builder = _builder(robot, task)
-    spec = task if isinstance(task, TrackingTask) else (TrackingTask() if task is None else None)
-    q0 = (
-        robot.middle.copy()
-        if initial is None
-        else robot.check_population(initial, "initial configuration")[0]
-    )
-    q0 = q0.copy()
+        raise TaskError(f"track() needs a framework.tracking.trajectory.Trajectory; got {type(trajectory).__name__}")
+    if not isinstance(warm_spread, (int, float, np.number)) or not np.isfinite(warm_spread) or warm_spread < 0:
+        raise TaskError(f"warm_spread must be a number >= 0 [rad / m]; got {warm_spread!r}")
+    q0 = robot.middle.copy() if initial is None else robot.check_population(initial, "initial configuration")[0].copy()
     options = dict(options or {})
     method = ik_solver(solver, options)  # checks the name and the options once
-    carry = method.carries_distribution
-    predict = carry if predict is None else bool(predict)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    if not np.isfinite(warm_spread) or warm_spread < 0:
-        raise TaskError(f"warm_spread must be a number >= 0 [rad / m]; got {warm_spread!r}")
-    state: dict[str, Any] = {}  # the previous solve's search distribution, for solvers that continue it
-
-    rows: list[tuple[IKResult, tuple[str, ...]]] = []
-    previous = q0
-    stop_reason = "completed"
-    problem: Problem | None = None
+    predict = method.carries_distribution if predict is None else bool(predict)
+    check_settings(seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
+                   max_iterations=max_iterations, population=population)  # every setting checked once, here
+    run = _Waypoints(robot, trajectory, task, method, options, bounds, priorities, warm_start, float(warm_spread),
+                     predict, dict(seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance,
+                                   time_budget=time_budget, max_iterations=max_iterations, population=population,
+                                   stop_at_tolerance=stop_at_tolerance))
     start, cpu_start = time.perf_counter(), time.process_time()
-    # a task that knows its parameters along the path (``path_parameters``), solved from the previous solution
-    # alone: stretches of waypoints run compiled (chain.py)
-    planner = getattr(spec if task is None else task, "path_parameters", None)
-    chained = planner is not None and warm_start and not predict and method.uses_jacobians
-    chain: Chain | None = None
-    with Progress(progress, trajectory.K, f"tracking {trajectory.name} ({solver})") as bar:
-        try:
-            k, missed = 0, True
-            while k < trajectory.K:
-                chained_results = chain is not None and not missed
-                if chained_results:
-                    results, missed = chain.run(k, previous, rng)
-                else:  # the first waypoint, one the engine missed, or no chain: the solver itself
-                    rotation = trajectory.rotation(k)
-                    position = trajectory.positions[k]
-                    moved = problem is not None and spec is not None and spec.update(
-                        problem.objective, position, rotation, previous)
-                    if not moved:
-                        problem = Problem(robot, builder(k, position, rotation, previous), bounds=bounds,
-                                          priorities=priorities)
-                    if chained:  # once, from the first waypoint's problem (every waypoint's has its layout)
-                        chained, planned = False, planner(problem, trajectory)
-                        chain = None if planned is None else Chain.of(problem, planned, method, make_request(
-                            problem, tolerance=tolerance, max_iterations=iterations_per_point, population=population,
-                            stop_at_tolerance=stop_at_tolerance, initial=previous))
-                    seeds, solver_options = _warm_start(problem, previous, k, method, options, warm_start,
-                                                        warm_spread, predict and warm_start, population, rng, carry,
-                                                        state)
-                    result = solve(problem, solver, seed=rng, max_iterations=iterations_per_point,
-                                   population=population, tolerance=tolerance, stop_at_tolerance=stop_at_tolerance,
-                                   initial=seeds, options=solver_options or None)
-                    if result.stop_reason == "interrupted":
-                        stop_reason = "interrupted"
-                        break
-                    results, missed = [result], False
-                    if chain is not None:
-                        chain.watch()
-                kept = 0
-                try:
-                    for result in results:
-                        rows.append((result, problem.program.term_kinds))
-                        previous, state = result.configuration, result.state
-                        bar.advance(result.task_error)
-                        k, kept = k + 1, kept + 1
-                        if callback is not None and callback(k - 1, result):
-                            stop_reason = "callback"
-                            break
-                        if chain is not None and chain.changed():  # the callback moved a term: the rest of
-                            chain = None  # the stretch is stale, and the path goes on one solve per waypoint
-                            break
-                finally:
-                    if chained_results:  # the seeds of the waypoints kept (those past a stop are not the path's)
-                        Chain.spend(rng, kept)
-                if stop_reason != "completed":
-                    break
-        except KeyboardInterrupt:
-            stop_reason = "interrupted"
-    settings = {
-        "solver": solver,
-        "iterations_per_point": int(iterations_per_point),
-        "population": population,
-        "warm_start": warm_start,
-        "warm_spread": warm_spread,
-        "predict": predict,
-        "tolerance": tolerance,
-        "stop_at_tolerance": stop_at_tolerance,
-        "bounds": bounds,
-        "priorities": priorities,
-        "options": options,
-        "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task)),
-    }
+    rows, stop_reason = run.all(q0, seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed),
+                                progress, callback)
+    settings = {"solver": solver, "max_iterations": max_iterations, "population": population,
+                "warm_start": warm_start, "warm_spread": warm_spread, "predict": predict, "tolerance": tolerance,
+                "angle_tolerance": angle_tolerance, "time_budget": time_budget,
+                "stop_at_tolerance": stop_at_tolerance, "bounds": bounds, "priorities": priorities, "options": options,
+                "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task))}
     times = (time.perf_counter() - start, time.process_time() - cpu_start)
     return _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance)
+
+
+class _Waypoints:
+    """One tracking run's waypoints: each solved by the solver (its problem built, or its targets moved, and its
+    warm start made), or a stretch of them answered by the chained engine (:class:`~framework.tracking.chain.Chain`)."""
+
+    def __init__(self, robot: Robot, trajectory: Trajectory, task, method: IKSolver, options: dict, bounds: str,
+                 priorities: bool, warm_start: bool, warm_spread: float, predict: bool, asked: dict) -> None:
+        self.robot, self.trajectory, self.method, self.options = robot, trajectory, method, options
+        self.builder = _builder(robot, task)
+        self.spec = task if isinstance(task, TrackingTask) else (TrackingTask() if task is None else None)
+        self.bounds, self.priorities, self.asked = bounds, priorities, asked
+        self.warm = (warm_start, warm_spread, predict and warm_start)
+        # a task that knows its parameters along the path (``path_parameters``), solved from the previous solution
+        # alone: stretches of waypoints run compiled (chain.py); a time budget is each waypoint's own
+        self.planner = getattr(self.spec if task is None else task, "path_parameters", None)
+        self.chained = self.planner is not None and warm_start and not predict and method.uses_jacobians \
+            and asked["time_budget"] is None
+        self.problem: Problem | None = None
+        self.chain: Chain | None = None
+        self.state: dict[str, Any] = {}  # the previous solve's search distribution, for solvers that continue it
+
+    def all(self, q0: np.ndarray, rng: np.random.Generator, progress: bool | None,
+            callback: TrackingCallback | None) -> tuple[list[tuple[IKResult, tuple[str, ...]]], str]:
+        """Every waypoint from ``q0``: the rows ``(result, term kinds)`` and the stop reason."""
+        trajectory, rows, previous, stop_reason = self.trajectory, [], q0, "completed"
+        with Progress(progress, trajectory.K, f"tracking {trajectory.name} ({self.method.name})") as bar:
+            try:
+                k, missed = 0, True
+                while k < trajectory.K:
+                    chained_results = self.chain is not None and not missed
+                    if chained_results:
+                        results, missed = self.chain.run(k, previous, rng)
+                    else:  # the first waypoint, one the engine missed, or no chain: the solver itself
+                        result = self.solve(k, previous, rng)
+                        if result.stop_reason == "interrupted":
+                            stop_reason = "interrupted"
+                            break
+                        results, missed = [result], False
+                    kept = 0
+                    try:
+                        for result in results:
+                            rows.append((result, self.problem.program.term_kinds))
+                            previous, self.state = result.configuration, result.state
+                            bar.advance(result.task_error)
+                            k, kept = k + 1, kept + 1
+                            if callback is not None and callback(k - 1, result):
+                                stop_reason = "callback"
+                                break
+                            if self.chain is not None and self.chain.changed():  # the callback moved a term: the
+                                self.chain = None  # stretch is stale, and the path goes on one solve per waypoint
+                                break
+                    finally:
+                        if chained_results:  # the seeds of the waypoints kept (those past a stop are not the path's)
+                            Chain.spend(rng, kept)
+                    if stop_reason != "completed":
+                        break
+            except KeyboardInterrupt:
+                stop_reason = "interrupted"
+        return rows, stop_reason
+
+    def solve(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> IKResult:
+        """Waypoint ``k`` solved by the solver from ``previous`` (the chain made from its problem the first time)."""
+        rotation, position = self.trajectory.rotation(k), self.trajectory.positions[k]
+        moved = self.problem is not None and self.spec is not None and self.spec.update(
+            self.problem.objective, position, rotation, previous)
+        if not moved:
+            self.problem = Problem(self.robot, self.builder(k, position, rotation, previous), bounds=self.bounds,
+                                   priorities=self.priorities)
+        asked = self.asked
+        if self.chained:  # once, from the first waypoint's problem (every waypoint's has its layout)
+            self.chained, planned = False, self.planner(self.problem, self.trajectory)
+            self.chain = None if planned is None else Chain.of(self.problem, planned, self.method, make_request(
+                self.problem, tolerance=asked["tolerance"], angle_tolerance=asked["angle_tolerance"],
+                max_iterations=asked["max_iterations"], population=asked["population"],
+                stop_at_tolerance=asked["stop_at_tolerance"], initial=previous))
+        warm_start, warm_spread, predict = self.warm
+        seeds, solver_options = _warm_start(self.problem, previous, k, self.method, self.options, warm_start,
+                                            warm_spread, predict, asked["population"], rng,
+                                            self.method.carries_distribution, self.state)
+        result = solve(self.problem, self.method.name, **{**asked, "seed": rng}, initial=seeds,
+                       options=solver_options or None)
+        if self.chain is not None:
+            self.chain.watch()
+        return result
 
 
 def _warm_start(
@@ -211,7 +221,7 @@ def _warm_start(
 ) -> tuple[np.ndarray | None, dict[str, Any]]:
     """Warm-start points ``(k, n)`` (or ``None``: cold) and solver options for waypoint ``k`` (see :func:`track`);
     ``carry``: the solver continues its search distribution, ``state``: the previous solve's
-    :attr:`~framework.solve.IKResult.state` (empty at the first waypoint)."""
+    :attr:`~framework.solvers.solve.IKResult.state` (empty at the first waypoint)."""
     if not warm_start:  # a local solver would otherwise start from the motion terms' previous configuration
         return None, ({"warm_start": False, **options} if "warm_start" in method.option_names else options)
     seeds = [predictor(problem, previous), previous] if predict else [previous]

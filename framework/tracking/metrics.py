@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 
 from ..costs.program import wrapping_coordinates
-from ..robot import Robot
-from ..solve import IKResult
-from ..trajectory import Trajectory
+from ..model.robot import Robot
+from ..solvers.solve import IKResult
+from .trajectory import Trajectory
 
 
 # ---------------------------------------------------------------------------------------------- smoothness

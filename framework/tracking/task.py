@@ -10,14 +10,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..costs import JointLimitPenalty, Motion, Objective, Orientation, Position, RelativePosition
-from ..batch import item_parameters
+from ..solvers.batch import item_parameters
 from ..costs.base import Term, check_weight
 from ..costs.motion import motion_name
 from ..errors import TaskError
-from ..problem import Problem
-from ..robot import Robot
-from ..solve import IKResult
-from ..trajectory import Trajectory
+from ..costs.problem import Problem
+from ..model.robot import Robot
+from ..solvers.solve import IKResult
+from .trajectory import Trajectory
 
 #: ``builder(k, position (3,), rotation (3, 3) or None, previous (n,)) -> Objective`` for waypoint ``k``.
 TaskBuilder = Callable[[int, np.ndarray, "np.ndarray | None", np.ndarray], Objective]

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..engine import LocalSettings, residuals, solve_local
-from ..problem import Problem
+from ..costs.problem import Problem
 from .task import TASK_SPACE_RATIO
 
 

@@ -1,0 +1,152 @@
+"""``mfabrik``: paper 003's M-FABRIK (and FABRIK for a fixed base) as a solver of the framework.
+
+``solve(problem, "mfabrik")`` takes a reach problem: one :class:`~framework.costs.Position` task term (the
+end-effector's position), optionally an :class:`~framework.costs.Obstacles` term, whose scene's floor shadows are
+M-FABRIK's obstacles (:meth:`Environment.from_scene`, the one scene description), and regularizers (``Motion``),
+which the method does not minimize but the result reports like any term's value. A robot with a mobile base (the
+``"base"`` group, ``x, y, θ``) is solved by M-FABRIK (Algorithm 1: base and arm), a fixed-base arm by FABRIK. It
+starts from the warm start, else the regularizers' reference, else the box middle, and returns the common
+:class:`~framework.solvers.solve.IKResult`; ``tracking.track`` drives it along paths as any solver. What is
+M-FABRIK-specific (chains, reach tables, regions, Algorithm 2) stays in this subpackage; the chain and reach table
+of a frame are built once per robot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...costs import Obstacles, Position
+from ...errors import SolverError
+from ..ik import IKSolver, Outcome, Request
+from ..multistart import start_configuration
+from ..registry import register_ik
+
+#: Iterations when the request names none (M-FABRIK's and FABRIK's own default).
+DEFAULT_ITERATIONS = 1000
+#: ReachResult reasons -> the framework's stop reasons.
+_STOP = {"converged": "tolerance", "max_iterations": "max_iterations", "stalled": "stagnation"}
+
+
+@dataclass(frozen=True)
+class MFabrikOptions:
+    """Options of ``mfabrik``.
+
+    Attributes:
+        orientation: how M-FABRIK turns the base: ``"follow_joint1"`` (paper 003's path experiment),
+            ``"face_target"`` or ``"fixed"`` (:class:`~framework.solvers.fabrik.BaseOrientation`).
+        base_margin: distance [m] the base's reference point keeps from the obstacles' shadows (paper 003: 0.2).
+        environment: floor obstacles of M-FABRIK's own (circles, rectangles, polygons in the floor plane, with
+            their margin and navigable box: an :class:`~framework.solvers.fabrik.Environment`, as reach task files give
+            them), beside an Obstacles term's shadows (its margin then replaces ``base_margin``), or ``None``.
+        window: iterations without progress before a restart (``None``: the method's own, 4 for M-FABRIK, 10 for
+            FABRIK); restarts: restarts from new arm shapes.
+        keep_link: M-FABRIK's forward reaching keeps the first joint at its fixed height (True) or leaves it
+            where the line puts it, as the paper's orthogonal ProjectPoint (False; :class:`MFabrik`).
+    """
+
+    orientation: str = "follow_joint1"
+    base_margin: float = 0.2
+    window: int | None = None
+    restarts: int = 10
+    environment: Any = None
+    keep_link: bool = True
+
+    def __post_init__(self) -> None:
+        from .environment import Environment
+        from .mobile import BaseOrientation
+
+        known = [o.value for o in BaseOrientation]
+        if self.orientation not in known:
+            raise SolverError(f"mfabrik orientation must be one of {known}; got {self.orientation!r}")
+        if not (isinstance(self.base_margin, (int, float)) and 0 <= self.base_margin < np.inf):
+            raise SolverError(f"mfabrik base_margin must be a distance >= 0 [m]; got {self.base_margin!r}")
+        if not isinstance(self.keep_link, bool):
+            raise SolverError(f"mfabrik keep_link must be True or False; got {self.keep_link!r}")
+        if self.environment is not None and not isinstance(self.environment, Environment):
+            raise SolverError(f"mfabrik environment must be a framework.solvers.fabrik.Environment or None; "
+                              f"got {type(self.environment).__name__}")
+        for name in ("window", "restarts"):
+            value = getattr(self, name)
+            if value is None and name == "window":
+                continue
+            if isinstance(value, bool) or not isinstance(value, int) or value < (1 if name == "window" else 0):
+                raise SolverError(f"mfabrik {name} must be an integer >= {1 if name == 'window' else 0}; "
+                                  f"got {value!r}")
+
+
+def reach_task(problem) -> tuple[Position, Obstacles | None]:
+    """The Position task term and the Obstacles term (or None) of a reach problem; a :class:`SolverError` naming
+    what M-FABRIK cannot take otherwise."""
+    positions = [t for _, t in problem.objective if isinstance(t, Position)]
+    obstacles = [t for _, t in problem.objective if isinstance(t, Obstacles)]
+    others = [t.name for _, t in problem.objective if t.is_task and not isinstance(t, (Position, Obstacles))]
+    if len(positions) != 1 or others or len(obstacles) > 1:
+        raise SolverError("mfabrik solves reach problems: one Position task term, optionally one Obstacles term "
+                          f"(and regularizers); this problem's task terms are "
+                          f"{[t.name for _, t in problem.objective if t.is_task]}")
+    return positions[0], (obstacles[0] if obstacles else None)
+
+
+@register_ik("mfabrik")
+class MFabrikSolver(IKSolver):
+    """M-FABRIK for a mobile base, FABRIK for a fixed one, behind the common interface."""
+
+    kind = "geometric (FABRIK)"
+
+    reference = "paper 003 (M-FABRIK, Algorithm 1); Aristidou & Lasenby 2011 (FABRIK) for fixed bases"
+    Options = MFabrikOptions
+
+    def prepare(self, problem) -> None:
+        """Nothing ahead of a solve: M-FABRIK takes no time budget (see :meth:`IKSolver.prepare`)."""
+
+    def solve(self, problem, request: Request) -> Outcome:
+        if request.deadline is not None or request.callback is not None:
+            raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")
+        position, obstacles = reach_task(problem)
+        x0, start = start_configuration(problem, request, True)
+        method, planner = self.planner(problem.robot, position.frame, obstacles)
+        result = planner.solve(position.target, x0, tolerance=request.tolerance,
+                               max_iterations=request.max_iterations or DEFAULT_ITERATIONS, seed=request.seed)
+        stop = _STOP.get(result.reason, "unreachable")
+        environment = planner.environment if method == "m-fabrik" else None
+        settings = {**self.options.__dict__, "method": method, "start": start, "reason": result.reason,
+                    "environment": None if environment is None else
+                    f"{len(environment.obstacles)} floor obstacles, margin {environment.margin:g} m",
+                    "max_iterations": request.max_iterations or DEFAULT_ITERATIONS}
+        return Outcome(result.configuration, stop, result.iterations, result.iterations,
+                       history=None, settings=settings, state={"base_path": result.base_path})
+
+    def planner(self, robot, frame: str, obstacles: Obstacles | None = None):
+        """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot, and
+        so is the planner without an Obstacles term (per options: its environment's areas are computed once)."""
+        from .chain import PlanarChain
+        from .environment import Environment
+        from .fabrik import Fabrik
+        from .mfabrik import MFabrik
+        from .mobile import MobileArm
+        from .reach import ReachTable
+
+        o = self.options
+        window = {} if o.window is None else {"window": o.window}
+        if "base" in robot.groups and robot.group("base").size == 3:
+            arm = MobileArm.of(robot, frame)
+
+            def planner(environment):
+                return MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, keep_link=o.keep_link,
+                               **window)
+
+            if obstacles is None:  # the scene of an Obstacles term may move between solves: made each time
+                key = ("mfabrik planner", frame, o.environment, o.orientation, o.restarts, o.window, o.keep_link)
+                return "m-fabrik", robot.memo(key, lambda: planner(o.environment))
+            given = o.environment or Environment(margin=o.base_margin)
+            return "m-fabrik", planner(Environment.from_scene(obstacles.scene, margin=given.margin,
+                                                              bounds=given.bounds, obstacles=given.obstacles))
+        if obstacles is not None or o.environment is not None:
+            raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
+                              "for a mobile base only")
+        chain = robot.memo(("fabrik chain", frame), lambda: PlanarChain.from_robot(robot, frame))
+        reach = robot.memo(("fabrik reach", frame), lambda: ReachTable.from_chain(chain))
+        return "fabrik", Fabrik(chain, restarts=o.restarts, reach=reach, **window)
