@@ -76,3 +76,34 @@ def test_find_and_include_through_package_dirs(tmp_path):
     robot = fw.load_robot(top, package_dirs=[packages])
     assert "tip" in robot.frame_names
     np.testing.assert_allclose(robot.frame_placement(robot.middle, "tip").translation, [0, 0, 0.3])
+
+
+def test_expansion_leaves_this_process_xacro_as_it_is(tmp_path, monkeypatch):
+    """xacro's globals are replaced in a process of its own, never in this one: with this process's xacro made
+    unusable, a file still expands, and xacro's evaluator and substitution commands are the library's own."""
+    import xacro
+    from xacro import substitution_args
+
+    before = (xacro.safe_eval, substitution_args._eval_find, substitution_args._eval_env)
+
+    def unusable(*args, **kwargs):
+        raise AssertionError("xacro was called in the user's process")
+
+    monkeypatch.setattr(xacro, "process_file", unusable)
+    robot = fw.load_robot(_arm(tmp_path), xacro_args={"length": 0.25})
+    assert robot.frame_placement(robot.middle, "tip").translation == pytest.approx([0, 0, 0.25])
+    assert (xacro.safe_eval, substitution_args._eval_find, substitution_args._eval_env) == before
+
+
+def test_relative_package_dirs_resolve_against_the_working_folder(tmp_path, monkeypatch):
+    """A relative ``package_dirs`` entry is the caller's folder, also for a ``$(find pkg)`` in an included file."""
+    package = tmp_path / "pkgs" / "my_arm"
+    (package / "urdf").mkdir(parents=True)
+    (package / "urdf" / "arm.urdf.xacro").write_text(ARM.replace("EXTRA", ""))
+    top = tmp_path / "robots" / "top.urdf.xacro"
+    top.parent.mkdir()
+    top.write_text('<robot name="top" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                   '<xacro:include filename="$(find my_arm)/urdf/arm.urdf.xacro"/></robot>')
+    monkeypatch.chdir(tmp_path)
+    robot = fw.load_robot(Path("robots") / "top.urdf.xacro", package_dirs=["pkgs"])
+    assert "tip" in robot.frame_names

@@ -330,57 +330,73 @@ class SelfCollision(Term):
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every checked pair of the robot's own geometries, as convex hulls (those included that the sphere
         rows leave to the exact check)."""
-        return self.shape.memo(("self hull pairs", self.margin), lambda: self_pairs(self.shape, self.margin))
+        return self.shape.derived(self_pairs, self.margin)
 
     def loose_hulls(self, robot: Robot) -> bool:
-        return self.shape.memo(("self hulls loose", self.margin), lambda: any(p.loose for p in self.hull_pairs(robot)))
+        return self.shape.derived(_any_loose, self.margin)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One row per pair of bodies: their sphere pairs (``SPHERES``), or the spheres of one against the
         other's box or capsule when a geometry pair has one (the larger such solid, used whole: ``SOLIDS`` on
         its frame). Built once per shape, cover and margin (a tracking task makes its terms anew at every
         waypoint)."""
-        key = ("self-collision blocks", id(self.cover), self.margin)  # the entry holds the cover: its id stays its
-        return self.shape.memo(key, lambda: (self.cover, self._build()))[1]
+        # the entry holds the cover (an argument): its id stays its own
+        return self.shape.derived(_self_blocks, self.cover, self.margin, self.name, key=(id(self.cover), self.margin))[1]
 
     def _build(self) -> tuple[Block, ...]:
-        solids = self.shape.solids()
-        inseparable = self.shape.inseparable(self.cover)
-        if inseparable:
-            warnings.warn(f"{self.name}: {len(inseparable)} geometry pair(s) whose sphere covers overlap in every "
-                          f"sampled collision-free configuration are left to the exact check: "
-                          f"{sorted(inseparable)}", stacklevel=2)
-        spheres: dict[str, list[int]] = {}
-        for k, geometry in enumerate(self.cover.geometries):
-            spheres.setdefault(geometry, []).append(k)
-        joints = self.cover.joints
-        sphere_pairs: dict[tuple[int, int], list[tuple[int, int]]] = {}
-        solid_sides: dict[tuple[str, int], set[int]] = {}
-        for a, b in self.shape.pairs:
-            if (a, b) in inseparable:
-                continue
-            if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
-                a, b = b, a  # b: the solid, a: the spheres
-            if b in solids:
-                for i in spheres.get(a, ()):
-                    solid_sides.setdefault((b, int(joints[i])), set()).add(i)
-                continue
-            for i in spheres.get(a, ()):
-                for j in spheres.get(b, ()):
-                    pair = (i, j) if joints[i] <= joints[j] else (j, i)
-                    sphere_pairs.setdefault((int(joints[pair[0]]), int(joints[pair[1]])), []).append(pair)
-        blocks = [_spheres_block(self.shape, self.cover, pairs, self.margin) for pairs in sphere_pairs.values()]
-        for (name, _), ks in solid_sides.items():
-            joint, placement, solid, _ = solids[name]
-            blocks.append(_solids_block(self.shape, self.cover, sorted(ks), solid, self.margin,
-                                        _geometry_frame(self.shape, name, joint, placement)))
-        if not blocks:
-            raise TaskError(f"{self.name}: no pair of links to keep apart "
-                            f"({len(self.shape.geometry.geometryObjects)} geometries)")
-        return tuple(blocks)
+        return _self_blocks(self.shape, self.cover, self.margin, self.name)[1]
 
     def __repr__(self) -> str:
         return f"SelfCollision({self.shape.robot.name!r}, margin={self.margin:g}, spheres={len(self.cover.radii)})"
+
+
+def _obstacle_blocks(shape: RobotShape) -> dict:
+    """The shape's table of obstacle terms' blocks: ``(id(cover), id(scene), margin) -> (cover, scene, blocks)``."""
+    return {}
+
+
+def _any_loose(shape: RobotShape, margin: float) -> bool:
+    """Whether any of the shape's self hull pairs at ``margin`` is loose."""
+    return any(p.loose for p in shape.derived(self_pairs, margin))
+
+
+def _self_blocks(shape: RobotShape, cover: SphereCover, margin: float, name: str) -> tuple[SphereCover, tuple]:
+    """``(cover, blocks)`` of the self-collision term ``name``: one row per pair of bodies (see
+    :meth:`SelfCollision.blocks`); the cover is kept with them (its id is their key)."""
+    solids = shape.solids()
+    inseparable = shape.inseparable(cover)
+    if inseparable:
+        warnings.warn(f"{name}: {len(inseparable)} geometry pair(s) whose sphere covers overlap in every "
+                      f"sampled collision-free configuration are left to the exact check: "
+                      f"{sorted(inseparable)}", stacklevel=2)
+    spheres: dict[str, list[int]] = {}
+    for k, geometry in enumerate(cover.geometries):
+        spheres.setdefault(geometry, []).append(k)
+    joints = cover.joints
+    sphere_pairs: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    solid_sides: dict[tuple[str, int], set[int]] = {}
+    for a, b in shape.pairs:
+        if (a, b) in inseparable:
+            continue
+        if a in solids and (b not in solids or solids[a][3] > solids[b][3]):
+            a, b = b, a  # b: the solid, a: the spheres
+        if b in solids:
+            for i in spheres.get(a, ()):
+                solid_sides.setdefault((b, int(joints[i])), set()).add(i)
+            continue
+        for i in spheres.get(a, ()):
+            for j in spheres.get(b, ()):
+                pair = (i, j) if joints[i] <= joints[j] else (j, i)
+                sphere_pairs.setdefault((int(joints[pair[0]]), int(joints[pair[1]])), []).append(pair)
+    blocks = [_spheres_block(shape, cover, pairs, margin) for pairs in sphere_pairs.values()]
+    for (geometry_name, _), ks in solid_sides.items():
+        joint, placement, solid, _ = solids[geometry_name]
+        blocks.append(_solids_block(shape, cover, sorted(ks), solid, margin,
+                                    _geometry_frame(shape, geometry_name, joint, placement)))
+    if not blocks:
+        raise TaskError(f"{name}: no pair of links to keep apart "
+                        f"({len(shape.geometry.geometryObjects)} geometries)")
+    return cover, tuple(blocks)
 
 
 class Obstacles(Term):
@@ -429,13 +445,13 @@ class Obstacles(Term):
         return obstacle_pairs(self.shape, self.scene, self.margin)  # per term: a scene is a value, not a key
 
     def loose_hulls(self, robot: Robot) -> bool:
-        return self.shape.memo(("moving geometries loose",), lambda: moving_loose(self.shape))
+        return self.shape.derived(moving_loose)
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:
         """One ``SOLIDS`` row per moving body and solid of the scene (a mesh obstacle's covering spheres are
         solids too). Built once per shape, cover, scene and margin, for the last few scenes (a tracking task makes
         its terms anew at every waypoint, on one scene)."""
-        built = self.shape.memo(("obstacle blocks",), dict)
+        built = self.shape.derived(_obstacle_blocks)
         key = (id(self.cover), id(self.scene), self.margin)  # the entries hold the cover and scene: their ids stay
         entry = built.get(key)
         if entry is None:

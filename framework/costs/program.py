@@ -127,6 +127,11 @@ class _Layout:
     Shared by every problem with the same terms (kinds, frames, coordinates) on the same robot.
     """
 
+    @classmethod
+    def of(cls, robot: Robot, terms: tuple[Term, ...]) -> _Layout:
+        """The layout of ``terms`` on ``robot`` (their blocks built)."""
+        return cls(robot, terms, [t.packed(robot)[0] for t in terms])
+
     def __init__(self, robot: Robot, terms: tuple[Term, ...], packed: list[tuple[Block, ...] | None]):
         #: compiled entry points resolved for this layout's argument types, by kernel (the local engine's; a
         #: program's arrays have the same types as every other program's of its layout)
@@ -295,7 +300,7 @@ class Program:
         else:
             weights, terms = zip(*pairs) if pairs else ((), ())  # floats (``Objective`` checked)
             key = ("layout", tuple([(t.level, t.name, t.layout_key(robot)) for t in terms]))
-        layout = robot.memo(key, lambda: _Layout(robot, terms, [t.packed(robot)[0] for t in terms]))
+        layout = robot.derived(_Layout.of, terms, key=key)
         packed = layout.packed_terms
         if len(packed) == 1:  # a copy: the program's own
             params = float_copy(terms[packed[0]].parameters(robot))

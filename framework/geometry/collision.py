@@ -250,11 +250,13 @@ class RobotShape:
             out[g.name] = (int(g.parentJoint), g.placement, solid_row(solid, np.eye(3), np.zeros(3), dims), volume)
         return out
 
-    def memo(self, key: tuple, make):
-        """What ``make()`` returns, built once per shape and ``key`` (the hull pairs of a collision term)."""
-        value = self._memo.get(key)
+    def derived(self, make, *args, key=None):
+        """``make(self, *args)``, built once per shape, ``make`` and ``args`` (or ``key`` in their place): what a
+        collision term derives from the shape (its hull pairs, its blocks); the function is part of the key."""
+        index = (make, args if key is None else key)
+        value = self._memo.get(index)
         if value is None:
-            value = self._memo[key] = make()
+            value = self._memo[index] = make(self, *args)
         return value
 
     def hull(self, index: int):

@@ -9,10 +9,10 @@ has ``nq >= n`` entries. Every conversion between the two lives in this module: 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -24,6 +24,8 @@ from .bounds import EMPTY_BOUNDS_REMEDY, check_bounds, override_bounds
 from .joints import Joint, JointKind, coordinate_names
 from .kinematics import FramePoses, PopulationKinematics
 from ..validate import all_finite, suggest
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, eq=False)
@@ -299,14 +301,17 @@ class Robot:
 
     def kinematics(self, frames: tuple[str, ...]) -> PopulationKinematics:
         """The compiled forward kinematics and frame Jacobians of ``frames`` over populations (built once)."""
-        return self.memo(("kinematics", frames), lambda: PopulationKinematics(self, frames))
+        return self.derived(PopulationKinematics, frames)
 
-    def memo(self, key: tuple, make: Callable[[], Any]) -> Any:
-        """What ``make()`` returns, built once per robot and ``key`` (compiled-kinematics tables, packed problem
-        layouts: derived from the model, not part of the robot's value)."""
-        value = self._cache.get(key)
+    def derived(self, make: Callable[..., T], *args: Any, key: Hashable = None) -> T:
+        """``make(self, *args)``, built once per robot, ``make`` and ``args`` (or ``key`` in their place, when the
+        arguments are not what identifies the result): tables derived from the model — compiled kinematics, packed
+        problem layouts, FABRIK chains — that are not part of the robot's value. The function itself is part of
+        the key, so no two callers share an entry by name."""
+        index = (make, args if key is None else key)
+        value = self._cache.get(index)
         if value is None:
-            value = self._cache[key] = make()
+            value = self._cache[index] = make(self, *args)
         return value
 
     def frame_placement(self, x: np.ndarray, frame: str) -> pin.SE3:

@@ -62,10 +62,12 @@ def dls_inverse(J: np.ndarray, damping: float = 0.05) -> np.ndarray:
 
 def position_and_jacobian(robot: Robot, x: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
     """World position ``(3,)`` [m] of ``frame`` and its position Jacobian ``(3, n)`` in joint coordinates."""
-    key = ("position of", frame)
-    # the residual p(x) − 0 of a position term is the position itself
-    program = robot.memo(key, lambda: Program(robot, 1.0 * Position(frame, np.zeros(3))))
-    return residuals(program, x)
+    return residuals(robot.derived(_position_program, frame), x)
+
+
+def _position_program(robot: Robot, frame: str) -> Program:
+    """The program of a position term at the origin: its residual p(x) − 0 is the frame's position itself."""
+    return Program(robot, 1.0 * Position(frame, np.zeros(3)))
 
 
 def full_turns(program: Program) -> np.ndarray:

@@ -64,7 +64,7 @@ class MobileArm:
     @classmethod
     def of(cls, robot: Robot, frame: str) -> MobileArm:
         """:meth:`from_robot` built once per robot and frame (its reach table takes ~0.1 s)."""
-        return robot.memo(("mfabrik arm", frame), lambda: cls.from_robot(robot, frame))
+        return robot.derived(cls.from_robot, frame)
 
     @classmethod
     def from_robot(cls, robot: Robot, frame: str | None = None, *, base: str = "base") -> MobileArm:

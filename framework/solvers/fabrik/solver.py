@@ -125,28 +125,36 @@ class MFabrikSolver(IKSolver):
         from .chain import PlanarChain
         from .environment import Environment
         from .fabrik import Fabrik
-        from .mfabrik import MFabrik
-        from .mobile import MobileArm
-        from .reach import ReachTable
 
         o = self.options
         window = {} if o.window is None else {"window": o.window}
         if "base" in robot.groups and robot.group("base").size == 3:
-            arm = MobileArm.of(robot, frame)
-
-            def planner(environment):
-                return MFabrik(arm, environment, orientation=o.orientation, restarts=o.restarts, keep_link=o.keep_link,
-                               **window)
-
             if obstacles is None:  # the scene of an Obstacles term may move between solves: made each time
-                key = ("mfabrik planner", frame, o.environment, o.orientation, o.restarts, o.window, o.keep_link)
-                return "m-fabrik", robot.memo(key, lambda: planner(o.environment))
+                return "m-fabrik", robot.derived(_m_fabrik, frame, o.environment, o)
             given = o.environment or Environment(margin=o.base_margin)
-            return "m-fabrik", planner(Environment.from_scene(obstacles.scene, margin=given.margin,
-                                                              bounds=given.bounds, obstacles=given.obstacles))
+            return "m-fabrik", _m_fabrik(robot, frame, Environment.from_scene(
+                obstacles.scene, margin=given.margin, bounds=given.bounds, obstacles=given.obstacles), o)
         if obstacles is not None or o.environment is not None:
             raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
                               "for a mobile base only")
-        chain = robot.memo(("fabrik chain", frame), lambda: PlanarChain.from_robot(robot, frame))
-        reach = robot.memo(("fabrik reach", frame), lambda: ReachTable.from_chain(chain))
+        chain = robot.derived(PlanarChain.from_robot, frame)
+        reach = robot.derived(_reach_table, frame)
         return "fabrik", Fabrik(chain, restarts=o.restarts, reach=reach, **window)
+
+
+def _m_fabrik(robot, frame: str, environment, o):
+    """M-FABRIK of ``frame`` in ``environment`` with the solver's options ``o`` (its arm built once per robot)."""
+    from .mfabrik import MFabrik
+    from .mobile import MobileArm
+
+    window = {} if o.window is None else {"window": o.window}
+    return MFabrik(MobileArm.of(robot, frame), environment, orientation=o.orientation, restarts=o.restarts,
+                   keep_link=o.keep_link, **window)
+
+
+def _reach_table(robot, frame: str):
+    """The reach table of ``frame``'s FABRIK chain (built once per robot)."""
+    from .chain import PlanarChain
+    from .reach import ReachTable
+
+    return ReachTable.from_chain(robot.derived(PlanarChain.from_robot, frame))
