@@ -48,7 +48,21 @@ def command() -> str:
         script = script.relative_to(ROOT)
     except ValueError:
         pass
-    return " ".join(["python", str(script), *sys.argv[1:]])
+    return " ".join(["python", str(script), *map(_portable, sys.argv[1:])])
+
+
+def _portable(argument: str) -> str:
+    """An absolute path argument as a reader could type it: relative to the repository, or ``…/name`` for a file
+    of this machine outside it (a document names no machine's folders)."""
+    key, eq, value = argument.rpartition("=") if argument.startswith("--") and "=" in argument else ("", "", argument)
+    if not value.startswith("/"):
+        return argument
+    path = Path(value)
+    try:
+        shown = str(path.resolve().relative_to(ROOT))
+    except ValueError:
+        shown = f"…/{path.name}"
+    return f"{key}{eq}{shown}"
 
 
 def kept_notes(path: Path) -> str:

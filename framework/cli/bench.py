@@ -143,15 +143,26 @@ def bench_command(args, console) -> int:
 
 def command_line(args) -> str:
     """The ``metaik bench`` command line of parsed arguments (for the header of generated documents)."""
-    words = ["metaik", "bench", *args.tasks]
+    words = ["metaik", "bench", *map(_portable, args.tasks)]
     for key, value in sorted(vars(args).items()):
         if key in ("tasks", "command", "handler") or value in (None, False):
             continue
         flag = "--" + key.replace("_", "-")
         values = value if isinstance(value, list) else [value]
         for v in values:
-            words += [flag] if v is True else [flag, str(v)]
+            words += [flag] if v is True else [flag, _portable(str(v))]
     return shlex.join(words)
+
+
+def _portable(value: str) -> str:
+    """An absolute path as a reader could type it: relative to the working folder, or ``…/name`` outside it (a
+    document names no machine's folders); anything else as it is."""
+    if not value.startswith("/"):
+        return value
+    try:
+        return str(Path(value).resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return f"…/{Path(value).name}"
 
 
 def _writable_folder(folder: Path, what: str) -> None:
