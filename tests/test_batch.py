@@ -113,7 +113,7 @@ def test_bad_batches_are_named_errors(puma):
         fw.solve_batch(problem, T[:3], seed=[1, 2])
     with pytest.raises(SolverError, match="2 configurations for 3 targets"):
         fw.solve_batch(problem, T[:3], initial=np.tile(robot.middle, (2, 1)))
-    two = fw.Problem(robot, fw.Position("ee", [0.3, 0, 0.3]) + fw.Orientation("ee", quat_xyzw=[0, 0, 0, 1]))
+    two = fw.Problem(robot, fw.Position("ee", [0.3, 0, 0.3]) + fw.Orientation("ee", [0, 0, 0, 1], quaternion="xyzw"))
     with pytest.raises(TaskError, match="2 task terms with a target"):
         fw.solve_batch(two, T[:2])
     with pytest.raises(TaskError, match="one target per item"):

@@ -62,7 +62,7 @@ def test_relative_position_against_pinocchio(robot, rng):
 def test_orientation_is_the_quaternion_vector_norm_from_scipy(robot, rng):
     X = robot.random_configurations(rng, 200)
     target_quat = Rotation.random(random_state=3).as_quat()  # (x, y, z, w)
-    values = Problem(robot, Orientation("arm1_ee", target_quat)).values(X)[:, 0]
+    values = Problem(robot, Orientation("arm1_ee", target_quat, quaternion="xyzw")).values(X)[:, 0]
     for value, M in zip(values, reference_placements(robot, X, "arm1_ee")):
         relative = Rotation.from_quat(target_quat).inv() * Rotation.from_matrix(M.rotation)
         assert value == pytest.approx(np.linalg.norm(relative.as_quat()[:3]), abs=1e-12)
@@ -88,7 +88,7 @@ def test_orientation_target_as_matrix_or_quaternion_agree(robot, rng):
     X = robot.random_configurations(rng, 20)
     rot = Rotation.from_euler("y", np.pi / 2)
     a = Problem(robot, Orientation("arm1_ee", rot.as_matrix())).values(X)
-    b = Problem(robot, Orientation("arm1_ee", rot.as_quat())).values(X)
+    b = Problem(robot, Orientation("arm1_ee", rot.as_quat(), quaternion="xyzw")).values(X)
     np.testing.assert_allclose(a, b, atol=1e-14)
 
 
@@ -354,16 +354,53 @@ def test_jacobians_on_a_real_robot_with_continuous_joints(erd, rng):
 
 
 def test_quaternion_order_is_named():
-    """quat_xyzw= and quat_wxyz= give the same rotation as scipy; a bare 4-vector is (x, y, z, w)."""
+    """Every form of a rotation gives scipy's matrix: 4 numbers with quaternion="xyzw" or "wxyz", a
+    pinocchio.Quaternion (built w first), a scipy Rotation, a matrix, an SE3, a 4x4; the order is kept for the targets
+    a term is moved to; 4 numbers without an order are refused, saying how (read in the other order they would be
+    another rotation, 2.6 rad away here)."""
     rot = Rotation.from_euler("zyx", [0.3, -0.7, 1.1])
     x, y, z, w = rot.as_quat()
-    for term in (Orientation("arm1_ee", quat_xyzw=[x, y, z, w]), Orientation("arm1_ee", quat_wxyz=[w, x, y, z]),
-                 Orientation("arm1_ee", [x, y, z, w]), Orientation("arm1_ee", rot.as_matrix())):
-        np.testing.assert_allclose(term.target, rot.as_matrix(), atol=1e-12)
-    with pytest.raises(fw.TaskError, match="exactly one"):
-        Orientation("arm1_ee", rot.as_matrix(), quat_wxyz=[w, x, y, z])
-    with pytest.raises(fw.TaskError, match="quat_wxyz must be 4"):
-        Orientation("arm1_ee", quat_wxyz=[w, x, y])
+    R = rot.as_matrix()
+    forms = [Orientation("arm1_ee", [x, y, z, w], quaternion="xyzw"), Orientation("arm1_ee", [w, x, y, z], quaternion="wxyz"),
+             Orientation("arm1_ee", pin.Quaternion(w, x, y, z)), Orientation("arm1_ee", rot), Orientation("arm1_ee", R),
+             Orientation("arm1_ee", pin.SE3(R, np.ones(3))), Orientation("arm1_ee", pin.SE3(R, np.ones(3)).homogeneous),
+             fw.Pose("arm1_ee", (np.zeros(3), [w, x, y, z]), quaternion="wxyz")]
+    for term in forms:
+        np.testing.assert_allclose(term.target if isinstance(term, Orientation) else term.rotation, R, atol=1e-12)
+    wrong = Rotation.from_quat([w, x, y, z]).as_matrix()  # the same numbers read in the other order
+    assert np.arccos((np.trace(wrong.T @ R) - 1) / 2) > 1.0
+    moved = Orientation("arm1_ee", [0, 0, 0, 1], quaternion="wxyz")  # w = 0: a half turn about z
+    moved.set_target([w, x, y, z])
+    np.testing.assert_allclose(moved.target, R, atol=1e-12)
+    for make in (lambda: Orientation("arm1_ee", [x, y, z, w]), lambda: fw.Pose("arm1_ee", (np.zeros(3), [x, y, z, w])),
+                 lambda: fw.RelativePose("arm1_ee", "arm2_ee", (np.zeros(3), [x, y, z, w]))):
+        with pytest.raises(fw.TaskError, match="quaternion='xyzw'.*quaternion='wxyz'"):
+            make()
+    with pytest.raises(fw.TaskError, match="names the order of 4 numbers"):
+        Orientation("arm1_ee", R, quaternion="wxyz")
+    with pytest.raises(fw.TaskError, match="quaternion must be 'xyzw' or 'wxyz'"):
+        Orientation("arm1_ee", [x, y, z, w], quaternion="xyz")
+
+
+def test_a_locked_floating_base_names_its_quaternion_order():
+    """7 numbers locking a floating base need their quaternion order; in either order, and as an SE3 or a
+    (position, pinocchio.Quaternion) pair, the base stands at the same pose."""
+    rot = Rotation.from_euler("zyx", [0.4, 0.2, -0.3])
+    x, y, z, w = rot.as_quat()
+    p = [0.1, -0.2, 0.3]
+    text = ('<robot name="f"><link name="body"/><link name="tip"/><joint name="j" type="revolute"><parent link="body"/>'
+            '<child link="tip"/><origin xyz="0 0 0.5"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" '
+            'velocity="1"/></joint></robot>')
+    poses = []
+    for locked, order in (([*p, x, y, z, w], "xyzw"), ([*p, w, x, y, z], "wxyz"), (pin.SE3(rot.as_matrix(), np.array(p)), None),
+                          ((p, pin.Quaternion(w, x, y, z)), None)):
+        robot = fw.robot_from_urdf(text, floating_base=True, locked={"root_joint": locked}, quaternion=order)
+        poses.append(robot.frame_placement(robot.middle, "body"))
+    for pose in poses:
+        np.testing.assert_allclose(pose.translation, p, atol=1e-12)
+        np.testing.assert_allclose(pose.rotation, rot.as_matrix(), atol=1e-12)
+    with pytest.raises(fw.LimitsError, match="quaternion='xyzw'"):
+        fw.robot_from_urdf(text, floating_base=True, locked={"root_joint": [*p, x, y, z, w]})
 
 
 def test_a_target_moved_in_place_packs_as_a_problem_built_with_it(robot, rng):
@@ -417,3 +454,36 @@ def test_named_errors_report_the_worst_block_of_a_name(robot, rng):
     errors = problem.program.task_errors(x).tolist()
     assert errors == pytest.approx([0.1, 0.0, 0.3], abs=1e-12)
     assert problem.program.named_errors(errors) == {"p": errors[2], "q": errors[1]}
+
+
+def test_a_task_file_names_the_order_of_its_quaternions(tmp_path):
+    """``quaternion = "wxyz"`` beside 4 numbers in a [[terms]] entry (pose or orientation) reads them in that order;
+    without it the file is refused with a message that says how."""
+    from framework.io.taskfile import load_task
+
+    rot = Rotation.from_euler("zyx", [0.3, -0.7, 1.1])
+    x, y, z, w = rot.as_quat()
+    text = f"""
+[task]
+name = "q"
+robot = "puma560"
+[[terms]]
+type = "pose"
+frame = "ee"
+position = [0.4, 0.1, 0.3]
+rotation = [{w}, {x}, {y}, {z}]
+quaternion = "wxyz"
+[[terms]]
+type = "orientation"
+frame = "ee"
+target = [{x}, {y}, {z}, {w}]
+quaternion = "xyzw"
+"""
+    path = tmp_path / "q.toml"
+    path.write_text(text)
+    pose, orientation = load_task(path).cases[0].problem.objective.terms
+    np.testing.assert_allclose(pose[1].rotation, rot.as_matrix(), atol=1e-12)
+    np.testing.assert_allclose(orientation[1].target, rot.as_matrix(), atol=1e-12)
+    path.write_text(text.replace('quaternion = "wxyz"\n', ""))
+    with pytest.raises(fw.TaskError, match="name their order with quaternion="):
+        load_task(path)

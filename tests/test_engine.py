@@ -81,8 +81,8 @@ def test_pose_targets_as_se3_matrix_or_pair_agree(panda, rng):
     tip = "panda_hand_tcp"
     T = panda.frame_placement(panda.random_configurations(rng, 1)[0], tip)
     quat = pin.Quaternion(T.rotation).coeffs()  # (x, y, z, w)
-    forms = [T, T.homogeneous, (T.translation, T.rotation), (T.translation, quat)]
-    terms = [fw.Pose(tip, form) for form in forms]
+    forms = [T, T.homogeneous, (T.translation, T.rotation), (T.translation, pin.Quaternion(T.rotation))]
+    terms = [fw.Pose(tip, form) for form in forms] + [fw.Pose(tip, (T.translation, quat), quaternion="xyzw")]
     for term in terms[1:]:
         np.testing.assert_allclose(term.position, terms[0].position, atol=1e-15)
         np.testing.assert_allclose(term.rotation, terms[0].rotation, atol=1e-12)

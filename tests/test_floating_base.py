@@ -72,7 +72,8 @@ def test_population_fk_of_a_floating_base_equals_pinocchio_free_flyer(talos_path
 def test_a_floating_base_locked_at_a_pose(talos_path, form):
     pose = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.7), np.array([0.3, -0.1, 0.9]))
     value = {"7-vector": pin.SE3ToXYZQUAT(pose), "SE3": pose, "matrix": pose.homogeneous}[form]
-    robot = fw.load_robot(talos_path, floating_base=True, locked={"root_joint": value})
+    robot = fw.load_robot(talos_path, floating_base=True, locked={"root_joint": value},
+                          quaternion="xyzw" if form == "7-vector" else None)  # Pinocchio's configuration order
     assert robot.n == 32 and "root_joint_x" not in robot.joint_names
     full = pin.buildModelFromUrdf(str(talos_path), pin.JointModelFreeFlyer())
     data = full.createData()

@@ -202,7 +202,8 @@ def test_scene_tables_and_their_errors(tmp_path):
     scene = fw.Scene.from_tables([
         {"type": "box", "center": [0.5, 0, 0.3], "size": [0.8, 1.2, 0.05], "rpy": [0, 0, 0.3], "name": "table"},
         {"type": "sphere", "center": [0, 0, 1], "radius": 0.1},
-        {"type": "capsule", "center": [0, 0, 1], "radius": 0.1, "length": 0.4, "quat_wxyz": [1, 0, 0, 0]},
+        {"type": "capsule", "center": [0, 0, 1], "radius": 0.1, "length": 0.4, "rotation": [1, 0, 0, 0],
+         "quaternion": "wxyz"},
         {"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 2]},
     ])
     assert [o.name for o in scene] == ["table", "sphere", "capsule", "plane"]
@@ -215,8 +216,9 @@ def test_scene_tables_and_their_errors(tmp_path):
         ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "colour": "red"}, "unknown keys"),
         ({"type": "box", "center": [0, 0, 0], "size": [1, -1, 1]}, "edge lengths > 0"),
         ({"type": "box", "center": [0, 0], "size": [1, 1, 1]}, "center must be 3"),
-        ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "rpy": [0, 0, 0], "quat_xyzw": [0, 0, 0, 1]},
-         "give one of"),
+        ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "rpy": [0, 0, 0], "rotation": [0, 0, 0, 1],
+          "quaternion": "xyzw"}, "either rpy or rotation"),
+        ({"type": "box", "center": [0, 0, 0], "size": [1, 1, 1], "rotation": [0, 0, 0, 1]}, "name their order"),
         ({"type": "sphere", "center": [0, 0, 0], "radius": 0}, "radius must be"),
         ({"type": "plane", "point": [0, 0, 0], "normal": [0, 0, 0]}, "normal must not be zero"),
         ({"type": "mesh", "path": "missing.stl"}, "does not exist"),

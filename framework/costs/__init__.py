@@ -1,6 +1,6 @@
 """Cost terms (the task layer): each is defined once by its residual blocks; they compose with weights."""
 
-from ..geometry.rotations import rotation_from
+from ..model.rotations import rotation_from
 from .base import LEVELS, Objective, Term, check_weight
 from .collision import Obstacles, SelfCollision
 from .com import CenterOfMass

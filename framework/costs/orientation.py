@@ -3,19 +3,19 @@
 Residual ``r = log(R_targetᵀ R(x))`` (3,) [rad]: its norm is the angle φ ∈ [0, π] of the relative rotation.
 Value ``ρ(r) = sin(‖r‖/2)`` — the norm of the relative quaternion's vector part, paper 002's measure: 0 for
 equal rotations, 1 for a half turn. Success holds the angle ``‖r‖`` to the angular tolerance [rad].
-Quaternion targets are ``(x, y, z, w)`` (scalar last, as ``scipy.spatial.transform.Rotation``).
+A quaternion target given as 4 numbers names its order (``quaternion="xyzw"`` or ``"wxyz"``, :mod:`framework.model.rotations`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from ..errors import TaskError
 from ..compiled.native import internal, matrix
 from ..model.robot import Robot
-from ..geometry.rotations import rotation_defects, rotation_target
+from ..model.rotations import check_order, rotation_defects, rotation_from
 from . import blocks as B
 from .base import Term, TermEntry, finite_rows
 from .curvature import chain_curvature
@@ -82,33 +82,34 @@ ORIENTATION = BlockKind("orientation", orientation_residual, orientation_second_
 class Orientation(Term):
     """``sin(φ/2)`` (unitless) for the angle φ between the frame's rotation and the target's.
 
-    The target is a ``(3, 3)`` rotation matrix (or a ``pinocchio.SE3``'s rotation), or a quaternion given with its
-    order named: ``quat_xyzw=`` (scipy's order) or ``quat_wxyz=`` (Eigen's constructor order, ROS messages spell
-    out x, y, z, w). A bare 4-vector as ``target`` is read as ``(x, y, z, w)``.
+    The target (world frame) is a ``(3, 3)`` rotation matrix, a ``pinocchio.Quaternion``, a scipy ``Rotation``, a
+    ``pinocchio.SE3`` or 4x4 matrix (its rotation), or 4 numbers with their order named: ``quaternion="xyzw"``
+    (scipy, ROS messages) or ``quaternion="wxyz"`` (``pinocchio.Quaternion(w, x, y, z)``, Eigen, MuJoCo); the term
+    keeps that order for the targets it is moved to.
     """
 
-    task_type, task_keys, category = "orientation", ("frame", "target"), "orientation"
+    task_type, task_keys, category = "orientation", ("frame", "target", "quaternion"), "orientation"
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Orientation:
-        return cls(entry.text("frame"), entry.value("target"), name=entry.name)
+        return cls(entry.text("frame"), entry.value("target"),
+                   quaternion=entry.text("quaternion") if entry.has("quaternion") else None, name=entry.name)
 
     level = "task"
     has_target = True
     fixed_layout = True
 
-    def __init__(self, frame: str, target: Sequence[float] | np.ndarray | None = None, *,
-                 quat_xyzw: Sequence[float] | None = None, quat_wxyz: Sequence[float] | None = None,
-                 name: str | None = None):
+    def __init__(self, frame: str, target: Any, *, quaternion: str | None = None, name: str | None = None):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"orientation[{frame}]"
-        self.set_target(target, quat_xyzw=quat_xyzw, quat_wxyz=quat_wxyz)
+        self.quaternion = check_order(quaternion, f"orientation target of {frame!r}")
+        self.set_target(target)
 
-    def set_target(self, target: Sequence[float] | np.ndarray | None = None, *,
-                   quat_xyzw: Sequence[float] | None = None, quat_wxyz: Sequence[float] | None = None) -> None:
-        """Change the target rotation (world frame): a matrix, or a quaternion with its order named."""
-        self.target = rotation_target(target, quat_xyzw, quat_wxyz, f"orientation target of {self.frame!r}")
+    def set_target(self, target: Any) -> None:
+        """Change the target rotation (world frame), in any form the constructor takes (4 numbers in the term's
+        ``quaternion`` order)."""
+        self.target = rotation_from(target, f"orientation target of {self.frame!r}", self.quaternion)
         self._touch()
 
     def target_parameters(self, robot: Robot, targets) -> np.ndarray:

@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..model.robot import Robot
-from ..geometry.rotations import pack_transform, rotation_defects, rotation_from
+from ..model.rotations import check_order, pack_transform, rotation_defects, rotation_from
 from . import blocks as B
 from .base import Term, TermEntry, as_vector, finite_rows
 from .orientation import ORIENTATION
@@ -17,17 +17,18 @@ from .position import POSITION
 from .program import Block
 
 
-def pose_parameters(target, what: str | Callable[[], str]) -> np.ndarray:
+def pose_parameters(target, what: str | Callable[[], str], quaternion: str | None = None) -> np.ndarray:
     """``(12,)``: the position then the row-major rotation of a ``pinocchio.SE3``, a 4x4 homogeneous matrix or a
-    ``(position, rotation)`` pair (rotation as a matrix or an ``(x, y, z, w)`` quaternion); validated (``what``
-    names it in errors: a string, or a callable making it only when there is one)."""
+    ``(position, rotation)`` pair (rotation in any form :func:`~framework.model.rotations.rotation_from` takes,
+    4 numbers in the ``quaternion`` order); validated (``what`` names it in errors: a string, or a callable making it
+    only when there is one)."""
     out = np.empty(12)
     if type(target) is pin.SE3 and pack_transform(target.homogeneous, out) == 0:  # the common case
         return out
     what = what if isinstance(what, str) else what()
     if isinstance(target, tuple) and len(target) == 2:
         out[:3] = as_vector(target[0], 3, f"{what} position")
-        out[3:] = rotation_from(target[1], what).ravel()
+        out[3:] = rotation_from(target[1], f"{what} rotation", quaternion).ravel()
         return out
     if isinstance(target, pin.SE3):
         T = target.homogeneous  # a new array
@@ -49,9 +50,9 @@ def pose_parameters(target, what: str | Callable[[], str]) -> np.ndarray:
     return out
 
 
-def pose_from(target, what: str) -> tuple[np.ndarray, np.ndarray]:
+def pose_from(target, what: str, quaternion: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(position (3,), rotation (3, 3))`` of what :func:`pose_parameters` reads; validated."""
-    p = pose_parameters(target, what)
+    p = pose_parameters(target, what, quaternion)
     return p[:3], p[3:].reshape(3, 3)
 
 
@@ -61,28 +62,31 @@ class Pose(Term):
 
     Residual ``(p − t, log(R_tᵀ R))`` (6,); success holds the distance to the linear tolerance [m] and the angle
     φ to the angular one [rad]. ``target``: a ``pinocchio.SE3``, a 4x4 homogeneous matrix, or a ``(position,
-    rotation)`` pair, in the world frame.
+    rotation)`` pair, in the world frame; the rotation in any form :class:`Orientation` takes (4 numbers with
+    ``quaternion=`` naming their order, kept for the targets the term is moved to).
     """
 
-    task_type, task_keys = "pose", ("frame", "position", "rotation")
+    task_type, task_keys = "pose", ("frame", "position", "rotation", "quaternion")
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Pose:
-        return cls(entry.text("frame"), (entry.value("position"), entry.value("rotation")), name=entry.name)
+        return cls(entry.text("frame"), (entry.value("position"), entry.value("rotation")),
+                   quaternion=entry.text("quaternion") if entry.has("quaternion") else None, name=entry.name)
 
     level = "task"
     has_target = True
     fixed_layout = True
 
-    def __init__(self, frame: str, target, *, name: str | None = None):
+    def __init__(self, frame: str, target, *, quaternion: str | None = None, name: str | None = None):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"pose[{frame}]"
+        self.quaternion = check_order(quaternion, f"pose target of {frame!r}")
         self.set_target(target)
 
     def set_target(self, target) -> None:
         """Move the target pose (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``)."""
-        self._parameters = pose_parameters(target, lambda: f"pose target of {self.frame!r}")
+        self._parameters = pose_parameters(target, lambda: f"pose target of {self.frame!r}", self.quaternion)
         self._touch()
 
     @property

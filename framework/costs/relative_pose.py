@@ -10,6 +10,7 @@ from . import blocks as B
 from .base import Term, TermEntry
 from .kinds import BlockKind
 from .lie import left_jacobian_inverse, rotation_log
+from ..model.rotations import check_order
 from .program import Block
 from .workspace import RESIDUAL, views
 
@@ -88,29 +89,32 @@ class RelativePose(Term):
     (angular tolerance); their second order is left to Gauss-Newton in the Newton phase.
     """
 
-    task_type, task_keys = "relative_pose", ("frame_a", "frame_b", "offset", "offset_rotation")
+    task_type, task_keys = "relative_pose", ("frame_a", "frame_b", "offset", "offset_rotation", "quaternion")
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> RelativePose:
         """``offset``: the position of ``frame_b`` in ``frame_a``; ``offset_rotation``: its rotation (default the
-        identity)."""
+        identity; 4 numbers with ``quaternion`` naming their order)."""
         rotation = entry.value("offset_rotation") if entry.has("offset_rotation") else np.eye(3)
-        return cls(entry.text("frame_a"), entry.text("frame_b"), (entry.value("offset"), rotation), name=entry.name)
+        return cls(entry.text("frame_a"), entry.text("frame_b"), (entry.value("offset"), rotation),
+                   quaternion=entry.text("quaternion") if entry.has("quaternion") else None, name=entry.name)
 
     level = "task"
     has_target = True
     fixed_layout = True
 
-    def __init__(self, frame_a: str, frame_b: str, offset, *, name: str | None = None):
+    def __init__(self, frame_a: str, frame_b: str, offset, *, quaternion: str | None = None,
+                 name: str | None = None):
         self.frames = (frame_a, frame_b)
         self.name = name or f"relative_pose[{frame_a}, {frame_b}]"
+        self.quaternion = check_order(quaternion, self.name)
         self.set_target(offset)
 
     def set_target(self, offset) -> None:
         """Move the offset (pose of ``frame_b`` in ``frame_a``)."""
         from .pose import pose_from
 
-        self.position, self.rotation = pose_from(offset, f"offset of {self.name}")
+        self.position, self.rotation = pose_from(offset, f"offset of {self.name}", self.quaternion)
         self._touch()
 
     def blocks(self, robot: Robot) -> tuple[Block, ...]:

@@ -10,8 +10,8 @@ it as ``[[obstacles]]`` tables::
     table = Box(center=[0.6, 0.0, 0.35], size=[0.8, 1.2, 0.05])
     scene = Scene((table, Plane(point=[0, 0, 0], normal=[0, 0, 1]), Sphere([0.4, 0.2, 0.8], 0.1)))
 
-Units are metres; rotations are ``(3, 3)`` matrices or ``(x, y, z, w)`` quaternions (task files: ``rpy`` in
-radians, or ``quat_xyzw`` / ``quat_wxyz``). A mesh is approximated by spheres covering its surface for the
+Units are metres; a rotation is any form :mod:`framework.model.rotations` reads (4 numbers with
+``quaternion="xyzw"`` or ``"wxyz"``; task files: ``rpy`` in radians, or ``rotation`` with ``quaternion``). A mesh is approximated by spheres covering its surface for the
 kernel (the fitting of :mod:`framework.geometry.spheres`) and used whole by the exact check.
 """
 
@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TaskError
-from .rotations import rotation_target
+from ..model.rotations import rotation_from
 from .solids import BOX, CAPSULE, HALFSPACE, SPHERE, solid_row
 from .spheres import fit_spheres, mesh_surface_points
 from ..validate import check_table
@@ -55,8 +55,12 @@ def _positive(value: Any, what: str, *, zero: bool = False) -> float:
     return v
 
 
-def _rotation(value: Any, what: str) -> np.ndarray:
-    return np.eye(3) if value is None else rotation_target(value, None, None, what)
+def _rotation(shape: Any, what: str) -> None:
+    """``shape.rotation`` made a validated matrix (the identity when not given; 4 numbers in ``shape.quaternion``
+    order), and ``shape.quaternion`` cleared (the rotation is a matrix now)."""
+    value = np.eye(3) if shape.rotation is None else rotation_from(shape.rotation, what, shape.quaternion)
+    object.__setattr__(shape, "rotation", value)
+    object.__setattr__(shape, "quaternion", None)
 
 
 def _ring(center: np.ndarray, radius: float, sides: int = 32) -> np.ndarray:
@@ -130,6 +134,8 @@ class Box:
     size: np.ndarray
     rotation: np.ndarray | None = None
     name: str = "box"
+    #: the order of ``rotation`` given as 4 numbers: ``"xyzw"`` or ``"wxyz"`` (:mod:`~framework.model.rotations`)
+    quaternion: str | None = None
     #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
     exact: ClassVar[bool] = True
 
@@ -139,7 +145,7 @@ class Box:
         if (size <= 0).any():
             raise TaskError(f"{self.name} size must be three edge lengths > 0 [m]; got {size.tolist()}")
         object.__setattr__(self, "size", size)
-        object.__setattr__(self, "rotation", _rotation(self.rotation, f"{self.name} rotation"))
+        _rotation(self, f"{self.name} rotation")
 
     def solids(self) -> np.ndarray:
         return solid_row(BOX, self.rotation, self.center, self.size / 2)[None]
@@ -171,6 +177,8 @@ class Capsule:
     length: float
     rotation: np.ndarray | None = None
     name: str = "capsule"
+    #: the order of ``rotation`` given as 4 numbers: ``"xyzw"`` or ``"wxyz"`` (:mod:`~framework.model.rotations`)
+    quaternion: str | None = None
     #: Its one row of :meth:`solids` is its exact shape (the exact check's broad phase measures it).
     exact: ClassVar[bool] = True
 
@@ -178,7 +186,7 @@ class Capsule:
         object.__setattr__(self, "center", _vector(self.center, 3, f"{self.name} center"))
         object.__setattr__(self, "radius", _positive(self.radius, f"{self.name} radius"))
         object.__setattr__(self, "length", _positive(self.length, f"{self.name} length", zero=True))
-        object.__setattr__(self, "rotation", _rotation(self.rotation, f"{self.name} rotation"))
+        _rotation(self, f"{self.name} rotation")
 
     def solids(self) -> np.ndarray:
         return solid_row(CAPSULE, self.rotation, self.center, (self.radius, self.length / 2, 0.0))[None]
@@ -269,6 +277,8 @@ class Mesh:
     scale: np.ndarray = field(default_factory=lambda: np.ones(3))
     spheres: int = 16
     name: str = "mesh"
+    #: the order of ``rotation`` given as 4 numbers: ``"xyzw"`` or ``"wxyz"`` (:mod:`~framework.model.rotations`)
+    quaternion: str | None = None
     #: Its rows of :meth:`solids` cover its surface: not its exact shape.
     exact: ClassVar[bool] = False
 
@@ -276,7 +286,7 @@ class Mesh:
         if not Path(self.path).is_file():
             raise TaskError(f"{self.name}: mesh file {self.path} does not exist")
         object.__setattr__(self, "center", _vector(self.center, 3, f"{self.name} center"))
-        object.__setattr__(self, "rotation", _rotation(self.rotation, f"{self.name} rotation"))
+        _rotation(self, f"{self.name} rotation")
         scale = _vector(self.scale, 3, f"{self.name} scale")
         if (scale <= 0).any():
             raise TaskError(f"{self.name} scale must be three factors > 0; got {scale.tolist()}")
@@ -373,7 +383,7 @@ class Scene:
         return cls(tuple(_from_table(t, f"{where}[{k}]", folder) for k, t in enumerate(tables)))
 
 
-_ROTATION = {"rpy": "list", "quat_xyzw": "list", "quat_wxyz": "list"}
+_ROTATION = {"rpy": "list", "rotation": "list", "quaternion": "text"}
 #: An ``[[obstacles]]`` table by type: its required keys and every key's value kind (:mod:`framework.validate`).
 TABLES: dict[str, tuple[tuple[str, ...], dict[str, str]]] = {
     "sphere": (("center", "radius"), {"center": "list", "radius": "number"}),
@@ -396,17 +406,11 @@ def _from_table(table: Any, where: str, folder: Path | None) -> Obstacle:
     missing = [k for k in required if k not in table]
     if missing:
         raise TaskError(f"{where} ({kind}) needs {', '.join(missing)}")
-    rotations = [k for k in _ROTATION if k in table]
-    if len(rotations) > 1:
-        raise TaskError(f"{where}: give one of rpy, quat_xyzw, quat_wxyz; got {rotations}")
-    args = {k: v for k, v in table.items() if k not in ("type", "name", *_ROTATION)}
-    if rotations:
-        key = rotations[0]
-        if key == "rpy":
-            args["rotation"] = pin.rpy.rpyToMatrix(_vector(table[key], 3, f"{where} rpy"))
-        else:
-            args["rotation"] = rotation_target(None, table[key] if key == "quat_xyzw" else None,
-                                               table[key] if key == "quat_wxyz" else None, f"{where} rotation")
+    if "rpy" in table and ("rotation" in table or "quaternion" in table):
+        raise TaskError(f"{where}: give either rpy or rotation (with quaternion for 4 numbers), not both")
+    args = {k: v for k, v in table.items() if k not in ("type", "name", "rpy")}
+    if "rpy" in table:
+        args["rotation"] = pin.rpy.rpyToMatrix(_vector(table["rpy"], 3, f"{where} rpy"))
     if kind == "mesh" and folder is not None and not Path(args["path"]).is_absolute():
         args["path"] = str(folder / args["path"])
     return KINDS[kind](**args, name=table.get("name", kind))

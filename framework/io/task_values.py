@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import TaskError
-from ..geometry.rotations import rotation_from
+from ..model.rotations import rotation_from
 from ..tracking.trajectory import Trajectory
 from ..tracking.paths import circle, lemniscate, line, paper000, point_count, rose, sinusoid
 
@@ -42,7 +42,7 @@ def _rotation(axis: int):
 
 
 _ROTATIONS = {"Rx": _rotation(0), "Ry": _rotation(1), "Rz": _rotation(2)}
-#: ``[trajectory]`` types -> (required keys, optional keys); every type also takes ``name`` and ``orientation``.
+#: ``[trajectory]`` types -> (required keys, optional keys); every type also takes ``name`` and ``orientation`` (with ``quaternion`` naming the order of 4 numbers).
 TRAJECTORY_KEYS: dict[str, tuple[set[str], set[str]]] = {
     "circle": ({"centre", "radius"}, {"points", "plane", "start_angle", "turns"}),
     "lemniscate": ({"centre", "a"}, {"points", "plane"}),
@@ -138,7 +138,7 @@ def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int
     missing = required - set(spec)
     if missing:
         raise TaskError(f"{where} ({kind}) needs {sorted(missing)}")
-    unknown = set(spec) - required - optional - {"type", "name", "orientation"}
+    unknown = set(spec) - required - optional - {"type", "name", "orientation", "quaternion"}
     if unknown:
         raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}; known: {sorted(required | optional)}")
 
@@ -182,5 +182,6 @@ def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int
             keep = np.linspace(0, trajectory.K - 1, point_count(points)).round().astype(int)
             trajectory = trajectory[np.unique(keep)]
     if "orientation" in spec:
-        trajectory = trajectory.with_orientation(rotation_from(value("orientation"), f"{where} orientation"))
+        order = str(spec["quaternion"]) if "quaternion" in spec else None
+        trajectory = trajectory.with_orientation(rotation_from(value("orientation"), f"{where} orientation", order))
     return trajectory

@@ -102,7 +102,7 @@ from ..validate import check_table
 TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
              "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
              "bounds": "table", "package_dirs": "names", "floating_base": "bool", "srdf": "text",
-             "disabled_collisions": "list", "free_at": "list"}
+             "disabled_collisions": "list", "free_at": "list", "quaternion": "text"}
 TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench", "obstacles"}
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
@@ -268,7 +268,7 @@ def _tables(raw: Mapping, key: str) -> list[dict]:
 
 def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
     options = {}
-    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args", "floating_base"):
+    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args", "floating_base", "quaternion"):
         if key in task:
             options[key] = task[key]
     if "package_dirs" in task:  # relative to the task file

@@ -6,8 +6,9 @@ A URDF ``floating`` joint is rewritten this way; ``load_robot(..., floating_base
 (named ``root_joint``, as Pinocchio names its free-flyer). The six joints are ``<name>_x``, ``_y``, ``_z``, ``_yaw``,
 ``_pitch``, ``_roll``; their bounds are ``±translation`` [m], yaw and roll one turn (continuous), pitch
 ``[−π/2, π/2]`` (the parametrization is singular at its ends), and can be set like any other bound. A floating
-joint can be locked at a full pose: a 7-vector ``(x, y, z, qx, qy, qz, qw)`` (Pinocchio's order), a
-``pinocchio.SE3`` or a 4x4 matrix.
+joint can be locked at a full pose: a ``pinocchio.SE3``, a 4x4 matrix, a ``(position, rotation)`` pair, or 7 numbers
+``(x, y, z, q, q, q, q)`` whose quaternion order is named (``quaternion="xyzw"``, Pinocchio's configuration order, or
+``"wxyz"``; :mod:`framework.model.rotations`).
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LimitsError, RobotFileError
+from ..errors import LimitsError, RobotFileError, TaskError
+from .rotations import rotation_from
 
 #: Pinocchio's name for a free-flyer root joint; the name of the one ``floating_base=True`` adds.
 ROOT_JOINT = "root_joint"
@@ -85,37 +87,43 @@ def with_floating_joints(root: ET.Element, *, add_root: bool, translation: float
     return root, tuple(names)
 
 
-def pose_coordinates(value, name: str) -> dict[str, float]:
-    """The six joint values of a floating joint ``name`` locked at a pose: a 7-vector ``(x, y, z, qx, qy, qz,
-    qw)``, a ``pinocchio.SE3`` or a 4x4 homogeneous matrix."""
-    if isinstance(value, pin.SE3):
-        p, R = np.array(value.translation), np.array(value.rotation)
-    else:
-        try:
-            array = np.array(value, dtype=float)
-        except (TypeError, ValueError):
-            array = np.zeros(0)
-        if array.shape == (7,) and np.isfinite(array).all() and abs(np.linalg.norm(array[3:]) - 1.0) < 1e-6:
-            p = array[:3]
-            R = pin.Quaternion(array[6], *array[3:6]).normalized().toRotationMatrix()
-        elif array.shape == (4, 4) and np.isfinite(array).all() and np.allclose(array[3], [0, 0, 0, 1]):
-            p, R = array[:3, 3], array[:3, :3]
+def pose_coordinates(value, name: str, quaternion: str | None = None) -> dict[str, float]:
+    """The six joint values of a floating joint ``name`` locked at a pose: a ``pinocchio.SE3``, a 4x4 homogeneous
+    matrix, a ``(position, rotation)`` pair, or 7 numbers ``(x, y, z, q, q, q, q)`` in the ``quaternion`` order."""
+    what = f"floating joint {name!r} locked at a pose"
+    try:
+        if isinstance(value, pin.SE3):
+            p, R = np.array(value.translation), rotation_from(value, what)
+        elif isinstance(value, tuple) and len(value) == 2:
+            p, R = np.asarray(value[0], dtype=float), rotation_from(value[1], f"{what}: rotation", quaternion)
         else:
-            raise LimitsError(f"floating joint {name!r} is locked at a pose: a 7-vector (x, y, z, qx, qy, qz, qw) with "
-                              f"a unit quaternion, a pinocchio.SE3 or a 4x4 matrix; got {value!r}")
-        if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) <= 0:
-            raise LimitsError(f"floating joint {name!r}: the locked pose's rotation is not a rotation")
+            array = np.array(value, dtype=float)
+            if array.shape == (7,):
+                p, R = array[:3], rotation_from(array[3:], f"{what}: its quaternion", quaternion)
+            elif array.shape == (4, 4):
+                p, R = array[:3, 3], rotation_from(array, what)
+            else:
+                raise TaskError(f"{what}: give a pinocchio.SE3, a 4x4 matrix, a (position, rotation) pair or 7 "
+                                f"numbers (x, y, z and a quaternion, its order named); got {value!r}")
+    except (TypeError, ValueError):
+        raise LimitsError(f"{what}: give a pinocchio.SE3, a 4x4 matrix, a (position, rotation) pair or 7 numbers; "
+                          f"got {value!r}") from None
+    except TaskError as err:
+        raise LimitsError(str(err)) from None
+    if p.shape != (3,) or not np.isfinite(p).all():
+        raise LimitsError(f"{what}: its position must be 3 finite numbers [m]; got {p!r}")
     roll, pitch, yaw = pin.rpy.matrixToRpy(R)
     values = (*p, yaw, pitch, roll)
     return dict(zip(coordinate_joints(name), map(float, values)))
 
 
-def expand(names: tuple[str, ...], joints, locked: Mapping) -> tuple[list[str] | None, dict]:
+def expand(names: tuple[str, ...], joints, locked: Mapping, quaternion: str | None = None,
+           ) -> tuple[list[str] | None, dict]:
     """``joints=`` and ``locked=`` with floating joint names replaced by their six joints (``locked``: the pose
-    as six values)."""
+    as six values; ``quaternion``: the order of a pose's quaternion given as numbers)."""
     if joints is not None:
         joints = [j for name in joints for j in (coordinate_joints(name) if name in names else (name,))]
     out = {}
     for key, value in locked.items():
-        out.update(pose_coordinates(value, key) if key in names else {key: value})
+        out.update(pose_coordinates(value, key, quaternion) if key in names else {key: value})
     return joints, out

@@ -55,6 +55,7 @@ def load_robot(
     package_dirs: Sequence[str | Path] = (),
     trusted: bool = False,
     floating_base: bool = False,
+    quaternion: str | None = None,
 ) -> Robot:
     """Load a robot by index name or from a ``.urdf`` / ``.xacro`` file.
 
@@ -73,7 +74,9 @@ def load_robot(
             data by default: see :mod:`framework.model.xacro_files`).
         floating_base: add a free-flyer above the root link, solved as six coordinates (``root_joint_x`` ...
             ``root_joint_roll``; see :mod:`framework.model.floating`); a URDF ``floating`` joint always is. Lock one at a
-            pose with ``locked={"root_joint": (x, y, z, qx, qy, qz, qw)}`` (or a ``pinocchio.SE3`` / 4x4 matrix).
+            pose with ``locked={"root_joint": pose}``: a ``pinocchio.SE3``, a 4x4 matrix, a ``(position, rotation)``
+            pair, or 7 numbers ``(x, y, z, q, q, q, q)`` with ``quaternion=`` naming the order of the last four.
+        quaternion: ``"xyzw"`` or ``"wxyz"``: the order of a locked floating joint's quaternion given as numbers.
     """
     path, entry = resolve_robot(source)
     name = str(source) if entry else path.name.split(".")[0]
@@ -90,6 +93,7 @@ def load_robot(
         source=str(path),
         strict_groups=groups is not None,  # the index's groups shrink to the joints a user chose to solve
         floating_base=floating_base,
+        quaternion=quaternion,
     )
 
 
@@ -184,6 +188,7 @@ def robot_from_urdf(
     source: str | None = None,
     strict_groups: bool = True,
     floating_base: bool = False,
+    quaternion: str | None = None,
 ) -> Robot:
     """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot` (``strict_groups``: every member of
     ``groups`` must be a solved joint)."""
@@ -201,7 +206,7 @@ def robot_from_urdf(
     if floating_base or any(j.get("type") == "floating" for j in root.findall("joint")):
         root, floating = with_floating_joints(root, add_root=floating_base, translation=unbounded_translation)
         text = ET.tostring(root, encoding="unicode")
-        joints, locked = expand_floating(floating, joints, locked or {})
+        joints, locked = expand_floating(floating, joints, locked or {}, quaternion)
     try:
         full = pin.buildModelFromXML(text)
     except Exception as err:  # Pinocchio raises ValueError / RuntimeError on inconsistent trees
