@@ -286,9 +286,12 @@ def test_replay_builds_the_viewer_command(run_file, monkeypatch):
     assert replay_command_line(run_file) == [sys.executable, "-m", "rerun", str(run_file)]
     started = []
 
-    class FakePopen:
-        def __init__(self, command):
+    class FakePopen:  # a viewer that starts and runs
+        def __init__(self, command, **kwargs):
             started.append(command)
+
+        def wait(self, timeout=None):
+            raise subprocess.TimeoutExpired(started[-1], timeout)
 
     monkeypatch.setattr(subprocess, "Popen", FakePopen)
     replay(run_file)
@@ -297,6 +300,24 @@ def test_replay_builds_the_viewer_command(run_file, monkeypatch):
     add_replay_command(parser.add_subparsers(dest="command"))
     args = parser.parse_args(["replay", str(run_file)])
     assert replay_command(args, _Console()) == 0 and len(started) == 2
+
+
+def test_a_viewer_that_cannot_start_is_an_error_with_its_last_line(run_file, monkeypatch):
+    """No display (or a broken install): the viewer exits at once with an error; replay says so, with the viewer's
+    last line, and the command exits 2 — not "opening" and 0."""
+    import importlib
+
+    from framework.errors import RecordingError
+
+    module = importlib.import_module("framework.io.recording.replay")
+
+    monkeypatch.setattr(module, "replay_command_line", lambda path: [
+        sys.executable, "-c", "import sys; print('starting'); sys.exit('Error: neither WAYLAND_DISPLAY nor DISPLAY is set')"])
+    with pytest.raises(RecordingError, match="did not start \\(exit 1\\): Error: neither WAYLAND_DISPLAY"):
+        replay(run_file)
+    from framework.cli import main
+
+    assert main(["replay", str(run_file)]) == 2
 
 
 def test_replay_summary_prints_the_task_errors(solved, run_file):

@@ -49,7 +49,7 @@ def run_command(args, console: Console) -> int:
     table.add_column("")
     rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
                                                    "evaluations", "time (s)")}
-    all_ok, interrupted, solved = True, False, None
+    all_ok, interrupted, solved, missed = True, False, None, []
     header = ["case", "success", "task_error", "cost", *task.robot.coordinate_names]
     with console.status("solving") as status, _recorder(args, task, settings) as recorder, \
             _csv_rows(args.output, header) as csv_row:
@@ -68,6 +68,8 @@ def run_command(args, console: Console) -> int:
                 recorder.log_case(case, result)
             interrupted = result.stop_reason == "interrupted"
             all_ok &= result.success
+            if not result.success:
+                missed.append(f"{case.name}: {result.reason}")
             table.add_column(case.name, justify="right")
             for n in names:
                 rows[n].append(f"{result.terms[n]:.3e}")
@@ -82,6 +84,8 @@ def run_command(args, console: Console) -> int:
     for label, cells in rows.items():
         table.add_row(escape(label), *cells)
     console.print(table)
+    for line in missed:  # why each failed case failed, in one line
+        console.print(f"[red]missed[/] {escape(line)}")
     if solved is not None:
         x = solved[1].configuration
         groups = task.robot.groups or {"all": np.arange(task.robot.n)}
@@ -173,6 +177,9 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     except KeyboardInterrupt:  # before the tracking loop took over Ctrl-C (files opening, the problem's code
         interrupted = True  # compiling): what was done is in the table, the CSV and the recording
     console.print(tracking_table(task, results, solver, asked(settings)["seed"], tolerance))
+    for case, result in results:  # why a path missed waypoints, in one line
+        if result.reason:
+            console.print(f"[red]missed[/] {escape(case.name)}: {escape(result.reason)}")
     if args.output is not None:
         console.print(f"wrote {args.output}")
     _recorded(args, console)

@@ -151,6 +151,12 @@ class Term:
         for frame in self.frames:
             robot.frame_id(frame)
 
+    def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
+        """Why this task term may not be met at all, in a few words, when it knows (a target beyond the robot's
+        reach, outside the joint bounds), for a failed solve's :attr:`~framework.solvers.solve.IKResult.reason`;
+        ``None`` otherwise (``x``: where the solve ended)."""
+        return None
+
     def blocks(self, robot: Robot) -> tuple[Block, ...] | None:
         """The term's residual blocks for ``robot`` (``None``: no compiled form, :meth:`value` is used)."""
         return None

@@ -116,6 +116,19 @@ class Motion(Term):
     def validate(self, robot: Robot) -> None:
         self.previous_values(robot)
 
+    def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
+        """Targets outside the joint bounds (the search stays inside them), named with their bounds."""
+        idx, values = self.indices(robot), self.previous_values(robot)
+        out = [(int(i), v) for i, v in zip(idx, values) if not robot.lower[i] <= v <= robot.upper[i]]
+        if not out:
+            return None
+        i, v = out[0]
+        name, lo, hi = robot.coordinate_names[i], robot.lower[i], robot.upper[i]
+        unit = "m" if robot.coordinate_is_linear(i) else "rad"
+        degrees = " (degrees given for radians?)" if unit == "rad" and abs(v) > 2 * np.pi else ""
+        return (f"{name}'s target {v:g} lies outside its bounds [{lo:.4g}, {hi:.4g}] {unit}{degrees}"
+                + (f", and {len(out) - 1} more" if len(out) > 1 else ""))
+
     def parameters(self, robot: Robot) -> np.ndarray:
         """The block's parameters, the previous values (read without building the block: a path moves them at
         every waypoint)."""

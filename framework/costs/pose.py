@@ -11,6 +11,7 @@ from ..errors import TaskError
 from ..model.robot import Robot
 from ..model.rotations import check_order, pack_transform, rotation_defects, rotation_from
 from . import blocks as B
+from ..model.reach import reach_hint
 from .base import Term, TermEntry, as_vector, finite_rows
 from .orientation import ORIENTATION
 from .position import POSITION
@@ -98,6 +99,9 @@ class Pose(Term):
     def rotation(self) -> np.ndarray:
         """``(3, 3)`` the target rotation (a view of the packed parameters)."""
         return self._parameters[3:].reshape(3, 3)
+
+    def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
+        return reach_hint(robot, self.frame, self.position)
 
     def parameters(self, robot: Robot) -> np.ndarray:
         return self._parameters

@@ -9,6 +9,7 @@ import numpy as np
 from ..compiled.native import internal
 from ..model.robot import Robot
 from . import blocks as B
+from ..model.reach import reach_hint
 from .base import Term, TermEntry, as_vector, finite_rows
 from .curvature import position_curvature
 from .kinds import BlockKind
@@ -75,6 +76,9 @@ class Position(Term):
         """Move the target point ``(3,)`` [m, world] (a problem holding the term re-reads it)."""
         self.target = as_vector(target, 3, lambda: f"position target of {self.frame!r}")
         self._touch()
+
+    def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
+        return reach_hint(robot, self.frame, self.target)
 
     def target_parameters(self, robot: Robot, targets: Sequence) -> np.ndarray:
         """``(B, 3)`` target points [m, world] of a batch, validated at once."""

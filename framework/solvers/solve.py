@@ -24,6 +24,7 @@ from ..costs.problem import Problem
 from .ik import Request
 from .registry import ik_solver
 from .settings import DEFAULTS
+from .why import failure_reason
 from ..optimizers.base import MAX_POPULATION
 from ..validate import positive_int
 from ..validate import float_copy
@@ -75,6 +76,8 @@ class IKResult:
             (e.g. CMA-ES's adapted covariance along a trajectory).
         collisions: the exact collision check at ``configuration`` (coal on the URDF's geometry) when the
             problem has collision terms, else ``None``.
+        reason: why a failed solve failed, in one line (the task term missed and by how much, with what the term
+            knows of why: a target beyond reach, outside the joint bounds; or the contact found); ``""`` on success.
 
     ``terms``, ``task_error``, ``errors`` and ``history`` are made from the solve's numbers when first read
     (most callers read only the configuration and the success: a solve should not pay for tables nobody reads);
@@ -83,7 +86,7 @@ class IKResult:
 
     __slots__ = ("configuration", "cost", "success", "stop_reason", "iterations", "evaluations", "wall_time",
                  "solver", "settings", "state", "collisions", "_terms", "_task_error", "_errors", "_history",
-                 "_source")
+                 "_source", "_why")
 
     def __init__(self, configuration: np.ndarray, cost: float, terms: dict[str, float], task_error: float,
                  success: bool, stop_reason: str, iterations: int, evaluations: int, wall_time: float,
@@ -98,18 +101,28 @@ class IKResult:
         self._terms, self._task_error, self._history = terms, task_error, history
         self._errors = {} if errors is None else errors
         self._source = None
+        self._why = "" if success else f"stopped by {stop_reason}"
 
     @classmethod
     def _of_solve(cls, configuration: np.ndarray, cost: float, success: bool, stop_reason: str, iterations: int,
                   evaluations: int, wall_time: float, solver: str, settings: dict[str, Any], state: dict[str, Any],
-                  collisions: CollisionReport | None, source: tuple) -> IKResult:
+                  collisions: CollisionReport | None, source: tuple, why: tuple | str = "") -> IKResult:
         """A result whose tables are made on first read from ``source``: ``(program, term values (list, term
         order), task block errors (list, block order), history or None)``."""
         made = object.__new__(cls)  # (the slots set here: __init__'s defaults cost a call per solve)
         made.configuration, made.cost, made.success, made.stop_reason = configuration, cost, success, stop_reason
         made.iterations, made.evaluations, made.wall_time, made.solver = iterations, evaluations, wall_time, solver
         made.settings, made.state, made.collisions, made._source = settings, state, collisions, source
+        made._why = why
         return made
+
+    @property
+    def reason(self) -> str:
+        """Why the solve failed, in one line (``""`` on success); made when first read."""
+        if isinstance(self._why, tuple):  # (program, task block errors, tolerance, angle tolerance)
+            self._why = failure_reason(*self._why[:2], self._why[2], self._why[3], self.collisions,
+                                       self.stop_reason, self.configuration)
+        return self._why
 
     def _make(self) -> None:
         program, values, errors, history = self._source
@@ -128,6 +141,7 @@ class IKResult:
     def __getstate__(self) -> dict[str, Any]:
         if self._source is not None:
             self._make()
+        self.reason  # noqa: B018  (made: a pickle carries the line, not the program)
         return {name: getattr(self, name) for name in self.__slots__}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -303,4 +317,5 @@ def result_of(problem: Problem, outcome, solver: str, request: Request, start: f
         and (collisions is None or not collisions.colliding)
     return IKResult._of_solve(x, cost, success, stop, int(iterations), int(evaluations),
                               time.perf_counter() - start, solver, settings, state, collisions,
-                              (program, value_list, error_list, history))
+                              (program, value_list, error_list, history),
+                              "" if success else (program, error_list, request.tolerance, request.angle_tolerance))

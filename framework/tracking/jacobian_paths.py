@@ -19,7 +19,7 @@ from ..costs import Position, Program
 from ..costs.motion import motion_name
 from ..errors import TaskError
 from ..model.robot import Robot
-from .metrics import TrackingResult
+from .metrics import TrackingResult, spans
 from .task import FOLLOWER, POSITION
 from .trajectory import Trajectory
 from ..solvers.baselines.jacobian import jacobian_ik
@@ -175,4 +175,14 @@ def _result(robot, trajectory, q0, rows, frames, offset, solver, settings, toler
         settings=settings,
         wall_time=float(times.sum()),
         cpu_time=float(times.sum()),
+        reason=_missed(position),
     )
+
+
+def _missed(position: np.ndarray) -> str:
+    """The reason line of a Jacobian path: the waypoints whose position error exceeds the tolerance."""
+    missed = np.flatnonzero(position > SUCCESS_TOLERANCE).tolist()
+    if not missed:
+        return ""
+    return (f"{len(missed)} of {len(position)} waypoints missed (k = {spans(missed)}); the worst by "
+            f"{position.max():.3g} m (tolerance {SUCCESS_TOLERANCE:g} m)")

@@ -18,7 +18,7 @@ from ..solvers.solve import IKResult, check_settings, make_request, solve
 from ..solvers import IKSolver, ik_solver
 from .trajectory import Trajectory
 from .chain import Chain
-from .metrics import TrackingResult, waypoint_errors
+from .metrics import TrackingResult, path_reason, waypoint_errors
 from .progress import Progress
 from .task import (
     CONTINUED_SIGMA0,
@@ -292,6 +292,7 @@ def _result(trajectory, q0, rows, stop_reason, solver, settings, times, toleranc
         settings=settings,
         wall_time=times[0],
         cpu_time=times[1],
+        reason=path_reason(results, trajectory.K, stop_reason),
     )
 
 

@@ -76,6 +76,8 @@ class TrackingResult:
         stop_reason: ``"completed"``, ``"interrupted"`` (Ctrl-C) or ``"callback"``.
         solver, settings: what ran, with every setting.
         wall_time, cpu_time: seconds for the whole run (wall clock, and CPU time of this process).
+        reason: what went wrong, in one line: the waypoints missed (and the first one's
+            :attr:`~framework.solvers.solve.IKResult.reason`), those not solved; ``""`` when every waypoint was.
     """
 
     trajectory: Trajectory
@@ -96,6 +98,7 @@ class TrackingResult:
     settings: dict[str, Any] = field(default_factory=dict, repr=False)
     wall_time: float = 0.0
     cpu_time: float = 0.0
+    reason: str = ""
 
     def __len__(self) -> int:
         return self.configurations.shape[0]
@@ -155,3 +158,27 @@ def waypoint_errors(result: IKResult, kinds: Sequence[str]) -> tuple[float, floa
         if kind in totals:
             totals[kind] += value
     return totals["position"], totals["orientation"], totals["motion"]
+
+
+def path_reason(results: Sequence, K: int, stop_reason: str) -> str:
+    """:attr:`TrackingResult.reason` of the waypoint results ``results`` (``IKResult``) of a path of ``K``."""
+    missed = [k for k, r in enumerate(results) if not r.success]
+    parts = []
+    if missed:
+        parts.append(f"{len(missed)} of {len(results)} waypoints missed (k = {spans(missed)}); waypoint {missed[0]}: "
+                     f"{results[missed[0]].reason}")
+    if len(results) < K:
+        parts.append(f"stopped ({stop_reason}) after {len(results)} of {K} waypoints")
+    return "; ".join(parts)
+
+
+def spans(ks: Sequence[int], shown: int = 6) -> str:
+    """``"3-7, 12, 20-21"``: runs of consecutive integers (the first ``shown`` runs, then ``...``)."""
+    runs: list[list[int]] = []
+    for k in ks:
+        if runs and k == runs[-1][1] + 1:
+            runs[-1][1] = k
+        else:
+            runs.append([k, k])
+    text = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs[:shown])
+    return text + (", ..." if len(runs) > shown else "")
