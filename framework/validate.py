@@ -39,6 +39,7 @@ KINDS: dict[str, tuple[tuple[type, ...], str]] = {
     "list": ((list, tuple), "a list"),
     "table": ((dict,), "a table"),
     "names": ((list, tuple), "a list of names"),
+    "folders": ((list, tuple, dict), "a list of folders or a table {package name = folder}"),
 }
 
 

@@ -83,16 +83,16 @@ def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
 
 @pytest.mark.parametrize("path, hands, groups", [
     ("pr2_description/urdf/pr2.urdf", ("l_gripper_tool_frame", "r_gripper_tool_frame"),
-     {"torso_lift_link": 1, "head_pan_link": 2, "l_shoulder_pan_link": 7, "r_shoulder_pan_link": 7}),
+     {"torso": 1, "head": 2, "left_arm": 7, "right_arm": 7}),
     ("tiago_description/robots/tiago_dual.urdf", ("hand_left_grasping_frame", "hand_right_grasping_frame"),
-     {"torso_lift_link": 1, "arm_left_1_link": 7, "arm_right_1_link": 7, "head_1_link": 2}),
+     {"torso": 1, "left_arm": 7, "right_arm": 7, "head": 2}),
     ("baxter_description/urdf/baxter.urdf", ("left_gripper", "right_gripper"),
-     {"head": 1, "left_upper_shoulder": 7, "right_upper_shoulder": 7}),
+     {"head": 1, "left_arm": 7, "right_arm": 7}),
 ])
 def test_a_full_urdf_gives_hands_not_fingers_and_disjoint_groups(erd, path, hands, groups):
     """Every joint of the URDF solved: a hand's fingers (TIAGo: 5 chains per hand; PR2, Baxter: a gripper jaw) give
     the hand's tool frame once, wheels give none; groups are the joints on the same chains — the torso shared by
-    the arms and the head, each arm, the head — disjoint, named after their first links."""
+    the arms and the head, each arm, the head — disjoint, named by role and side."""
     robot = fw.load_robot(erd / path)
     assert set(hands) <= set(robot.end_effectors)
     assert not [f for f in robot.end_effectors if "finger" in f or "wheel" in f or "thumb" in f]
@@ -122,8 +122,7 @@ def test_a_free_flyer_without_joints_is_solved_as_a_floating_base(erd):
     assert fw.solve(fw.Problem(drone, fw.Pose("base_link", target)), seed=0).success
     talos = fw.load_robot(erd / "talos_data" / "robots" / "talos_reduced.urdf", floating_base=True)
     assert {name: len(idx) for name, idx in talos.groups.items()} == {
-        "base": 6, "leg_left_1_link": 6, "leg_right_1_link": 6, "torso_1_link": 2, "arm_left_1_link": 8,
-        "arm_right_1_link": 8, "head_1_link": 2}
+        "base": 6, "left_leg": 6, "right_leg": 6, "torso": 2, "left_arm": 8, "right_arm": 8, "head": 2}
 
 
 def _solve_full_poses(robot, tips, count: int, seed: int, within: float, label: str = "",

@@ -59,8 +59,8 @@ def test_locked_joints_give_the_full_model_kinematics(erd, rng):
     )
     assert robot.n == 15
     assert robot.locked["head_1_joint"] == 0.3
-    assert set(robot.groups) == {"torso_lift_link", "arm_left_1_link", "arm_right_1_link"}  # not "base"
-    assert robot.joint_names[robot.group("torso_lift_link")[0]] == "torso_lift_joint"
+    assert set(robot.groups) == {"torso", "left_arm", "right_arm"}  # not "base": the lift is vertical
+    assert robot.joint_names[robot.group("torso")[0]] == "torso_lift_joint"
     X = robot.random_configurations(rng, 20)
     Xf = np.zeros((20, full.n))
     for name, value in robot.locked.items():

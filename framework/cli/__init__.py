@@ -18,6 +18,7 @@ from ..compiled import cache as compile_cache
 from ..errors import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, MetaikError
 from ..io.taskfile import resolve_task
 from .bench import add_bench_command, bench_command
+from .robots import add_robot_options
 from .info import robots_command, show_command, solvers_command, tasks_command
 from .reach import add_reach_command, reach_command
 from .replay import add_replay_command, replay_command
@@ -37,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     show = sub.add_parser("show", help="describe a robot: joints, bounds, frames, groups")
     show.add_argument("robot", help="robot index name or URDF/xacro path")
+    add_robot_options(show)
 
     run = sub.add_parser("run", help="solve a task file (a path, or the name of a shipped task)")
     run.add_argument("task", help="task file (.toml) or shipped task name, e.g. youbot_dual_coordinated_ik")

@@ -41,9 +41,9 @@ def solvers_command(args, console: Console) -> int:
 
 
 def show_command(args, console: Console) -> int:
-    from ..model.loading import load_robot
+    from .robots import load_robot_of
 
-    robot = load_robot(args.robot)
+    robot = load_robot_of(args)
     console.print(f"[bold]{robot.name}[/]: {robot.n} joint coordinates, end-effectors {list(robot.end_effectors)}")
     table = Table()
     for column in ("#", "coordinate", "kind", "lower", "upper", "group"):

@@ -10,12 +10,14 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from .robots import add_robot_options, load_robot_of
 from ..errors import EXIT_OK, TaskError
 
 
 def add_reach_command(sub: argparse._SubParsersAction) -> None:
     reach = sub.add_parser("reach", help="capability map of a frame (.npz, PNG slice, rerun), or base placement")
     reach.add_argument("robot", help="robot index name or URDF/xacro path")
+    add_robot_options(reach)
     reach.add_argument("--frame", help="the frame to map (default: the robot's first end-effector)")
     reach.add_argument("--voxel", type=float, default=0.1, help="voxel edge [m] (default 0.1)")
     reach.add_argument("--orientations", type=int, default=0,
@@ -85,10 +87,9 @@ def run_placement(args, console: Console, task) -> int:
 
 
 def reach_command(args, console: Console) -> int:
-    from ..model.loading import load_robot
     from ..reach.capability import base_placements, reachability_map
 
-    robot = load_robot(args.robot)
+    robot = load_robot_of(args)
     progress = False if args.no_progress else None
     if args.place:
         placements = base_placements(robot, _targets(args.place), radius=args.radius, step=args.step,

@@ -46,13 +46,12 @@ import numpy as np
 from ..solvers.baselines.solver import BUSS
 from ..costs import Position
 from ..errors import TaskError
-from ..model.loading import load_robot
 from ..costs.problem import Problem
 from ..model.robot import Robot
 from ..geometry.scene import Scene
 from ..solvers.solve import IKResult, solve
 from ..solvers.registry import ik_solver
-from .task_values import evaluate, trajectory_from_table
+from .task_values import robot_of_task, evaluate, trajectory_from_table
 from ..tracking import TrackingResult, TrackingTask, track
 from ..tracking.trajectory import Trajectory
 from ..solvers.fabrik.environment import Circle, Environment, Polygon, Rectangle
@@ -210,8 +209,7 @@ def reach_task_from_dict(raw: Mapping[str, Any], path: Path, *, points: int | No
     task = raw.get("task")
     if not isinstance(task, dict) or "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")
-    local = path.parent / str(task["robot"])
-    robot = load_robot(local if local.is_file() else task["robot"])
+    robot = robot_of_task(task, path)
     if "base" not in robot.groups:
         raise TaskError(f"robot {robot.name} has no joint group 'base': reach tasks need a mobile base")
     frame = str(task.get("frame", robot.end_effectors[0] if robot.end_effectors else ""))

@@ -29,9 +29,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import TaskError
-from ..model.loading import load_robot
 from ..model.robot import Robot
-from .task_values import evaluate
+from .task_values import robot_of_task, evaluate
 
 PLACEMENT_KEYS = {"radius", "step", "headings", "group", "seed", "targets"}
 
@@ -65,8 +64,7 @@ def placement_task_from_dict(raw: Mapping[str, Any], path: Path) -> PlacementTas
     extra = sorted(set(raw) - {"task", "placement"})
     if extra:
         raise TaskError(f"a placement task holds [task] and [placement] only; found {extra}")
-    local = path.parent / str(task["robot"])
-    robot = load_robot(local if local.is_file() else task["robot"])
+    robot = robot_of_task(task, path)
     targets_raw = table.get("targets")
     if not isinstance(targets_raw, dict) or not targets_raw:
         raise TaskError("[placement.targets] must map each hand frame to a point [x, y, z]")

@@ -185,3 +185,44 @@ def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int
         order = str(spec["quaternion"]) if "quaternion" in spec else None
         trajectory = trajectory.with_orientation(rotation_from(value("orientation"), f"{where} orientation", order))
     return trajectory
+
+
+#: ``[task]`` keys that say how to load its robot (the options of :func:`framework.load_robot`), and their kinds.
+ROBOT_KEYS = {"robot": "text", "joints": "names", "locked": "table", "end_effectors": "names", "groups": "table",
+              "xacro_args": "table", "bounds": "table", "package_dirs": "folders", "floating_base": "bool",
+              "quaternion": "text", "trusted": "bool"}
+
+
+def robot_of_task(task: Mapping[str, Any], path: Path):
+    """The robot of a task file's ``[task]`` table (``path``: the file): ``robot`` an index name or a file
+    relative to the task file, loaded with the table's :data:`ROBOT_KEYS` (``package_dirs`` relative to the task
+    file), as :func:`framework.load_robot` loads it; every kind of task file reads its robot here."""
+    from ..model.loading import load_robot
+
+    if "robot" not in task:
+        raise TaskError("[task] needs a robot (index name or file path)")
+    local = path.parent / str(task["robot"])
+    return load_robot(local if local.is_file() else task["robot"], **_robot_options(task, path))
+
+
+def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
+    options = {}
+    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args", "floating_base", "quaternion", "trusted"):
+        if key in task:
+            options[key] = task[key]
+    if "package_dirs" in task:  # relative to the task file
+        given = task["package_dirs"]
+        options["package_dirs"] = ({k: path.parent / str(v) for k, v in given.items()} if isinstance(given, dict)
+                                   else [path.parent / str(p) for p in given])
+    if "bounds" in task:
+        options["bounds"] = {k: _bound_pair(evaluate(v, {}, f"[task] bounds.{k}"), f"[task] bounds.{k}")
+                             for k, v in task["bounds"].items()}
+    return options
+
+
+def _bound_pair(value: Any, where: str) -> tuple[float, float]:
+    """``(lower, upper)`` of a ``[task] bounds`` entry, or a :class:`TaskError` naming ``where``."""
+    pair = np.asarray(value, dtype=float) if isinstance(value, (list, tuple, np.ndarray)) else None
+    if pair is None or pair.shape != (2,) or not np.all(np.isfinite(pair)):
+        raise TaskError(f"{where} must be a pair [lower, upper] of finite numbers [rad or m]; got {value!r}")
+    return float(pair[0]), float(pair[1])

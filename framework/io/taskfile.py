@@ -90,7 +90,7 @@ from ..costs.problem import Problem
 from ..resources import data_dir
 from ..model.robot import Robot
 from ..geometry.scene import Scene
-from .task_values import evaluate, expression_names, read_toml, trajectory_from_table
+from .task_values import ROBOT_KEYS, robot_of_task, evaluate, expression_names, read_toml, trajectory_from_table
 from ..tracking.trajectory import Trajectory
 from ..solvers.registry import ik_solver
 from ..solvers.settings import DEFAULTS
@@ -99,10 +99,8 @@ from ..validate import check_table
 
 #: Keys of ``[task]``, and the top-level tables of an IK / tracking task file.
 #: ``[task]`` keys and the kind of their values (:data:`framework.validate.KINDS`).
-TASK_KEYS = {"name": "text", "robot": "text", "description": "text", "priorities": "bool", "joints": "names",
-             "locked": "table", "end_effectors": "names", "groups": "table", "xacro_args": "table",
-             "bounds": "table", "package_dirs": "names", "floating_base": "bool", "srdf": "text",
-             "disabled_collisions": "list", "free_at": "list", "quaternion": "text"}
+TASK_KEYS = {"name": "text", "description": "text", "priorities": "bool", "srdf": "text",
+             "disabled_collisions": "list", "free_at": "list", **ROBOT_KEYS}
 TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench", "obstacles"}
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
@@ -199,9 +197,7 @@ def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> Tas
     check_table(task, TASK_KEYS, "[task]")
     if "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")
-    robot_source = task["robot"]
-    local = path.parent / str(robot_source)
-    robot = load_robot(local if local.is_file() else robot_source, **_robot_options(task, path))
+    robot = robot_of_task(task, path)
     solver = dict(_table(raw, "solver", path, required=False))
     check_table(solver, SOLVER_KEYS, "[solver]")
     _check_solver(solver)
@@ -264,27 +260,6 @@ def _tables(raw: Mapping, key: str) -> list[dict]:
     if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
         raise TaskError(f"{key} must be an array of tables ([[{key}]] entries); got {value!r}")
     return value
-
-
-def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
-    options = {}
-    for key in ("joints", "locked", "end_effectors", "groups", "xacro_args", "floating_base", "quaternion"):
-        if key in task:
-            options[key] = task[key]
-    if "package_dirs" in task:  # relative to the task file
-        options["package_dirs"] = [path.parent / str(p) for p in task["package_dirs"]]
-    if "bounds" in task:
-        options["bounds"] = {k: _bound_pair(evaluate(v, {}, f"[task] bounds.{k}"), f"[task] bounds.{k}")
-                             for k, v in task["bounds"].items()}
-    return options
-
-
-def _bound_pair(value: Any, where: str) -> tuple[float, float]:
-    """``(lower, upper)`` of a ``[task] bounds`` entry, or a :class:`TaskError` naming ``where``."""
-    pair = np.asarray(value, dtype=float) if isinstance(value, (list, tuple, np.ndarray)) else None
-    if pair is None or pair.shape != (2,) or not np.all(np.isfinite(pair)):
-        raise TaskError(f"{where} must be a pair [lower, upper] of finite numbers [rad or m]; got {value!r}")
-    return float(pair[0]), float(pair[1])
 
 
 def _previous(robot: Robot, table: Mapping[str, Any], variables: Mapping, path: Path) -> np.ndarray:

@@ -13,8 +13,10 @@ from ..validate import suggest
 from .joints import Joint, JointKind, coordinate_names
 
 
-#: Limits beyond this magnitude are treated as "no limit" (URDF continuous joints, planar bases).
-UNBOUNDED = 1e10
+#: Limits of this magnitude or beyond [rad or m] are a file's way of saying "no limit" (URDF continuous joints and
+#: planar bases, and files that write ±1e6 or ±1e9): read as none, the coordinate searched over ``±translation``
+#: [m] or one turn (``±angle``).
+UNBOUNDED = 1e3
 
 
 #: What :class:`Robot` adds when its search bounds are empty somewhere.

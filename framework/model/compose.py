@@ -84,9 +84,11 @@ def planar_base_urdf(
     )
 
 
-def mount_urdf(base: str | Path, mounts: Sequence[Mount], *, name: str | None = None) -> str:
-    """URDF text of ``base`` with every arm of ``mounts`` attached (see :class:`Mount`)."""
-    base_root, _ = _read(base)
+def mount_urdf(base: str | Path, mounts: Sequence[Mount], *, name: str | None = None,
+               package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (), trusted: bool = False) -> str:
+    """URDF text of ``base`` with every arm of ``mounts`` attached (see :class:`Mount`; ``package_dirs``,
+    ``trusted``: as :func:`framework.load_robot` takes them)."""
+    base_root, _ = _read(base, package_dirs=package_dirs, trusted=trusted)
     base_root = copy.deepcopy(base_root)
     if name:
         base_root.set("name", name)
@@ -95,7 +97,7 @@ def mount_urdf(base: str | Path, mounts: Sequence[Mount], *, name: str | None = 
     for mount in mounts:
         if mount.parent not in links:
             raise RobotFileError(f"cannot mount {mount.source!s:.60}: the base has no link {mount.parent!r}")
-        arm_root, directory = _read(mount.source, mount.xacro_args)
+        arm_root, directory = _read(mount.source, mount.xacro_args, package_dirs=package_dirs, trusted=trusted)
         arm = _prefixed(arm_root, mount.prefix, directory)
         arm_links = [link.get("name") for link in arm.findall("link")]
         arm_joints = [joint.get("name") for joint in arm.findall("joint")]
@@ -134,17 +136,19 @@ def mount(
 
     Groups: ``"base"`` holds the base's movable joints, and each mount's joints form the group
     ``mount.group`` (its prefix without the trailing underscore). End-effectors are the arms' end-effectors,
-    prefixed. ``load_options`` go to :func:`framework.robot_from_urdf` (``joints``, ``locked``, ``bounds``, ...).
+    prefixed. ``package_dirs`` and ``trusted`` are read as :func:`framework.load_robot` reads them, for the base and
+    every arm; the other ``load_options`` go to :func:`framework.robot_from_urdf` (``joints``, ``locked``, ...).
     """
-    text = mount_urdf(base, mounts, name=name)
-    base_root, _ = _read(base)
+    files = {k: load_options.pop(k) for k in ("package_dirs", "trusted") if k in load_options}
+    text = mount_urdf(base, mounts, name=name, **files)
+    base_root, _ = _read(base, **files)
     groups: dict[str, list[str]] = {}
     base_joints = [j.get("name") for j in base_root.findall("joint") if j.get("type") not in ("fixed", None)]
     if base_joints:
         groups["base"] = base_joints
     end_effectors: list[str] = []
     for m in mounts:
-        arm_root, _ = _read(m.source, m.xacro_args)
+        arm_root, _ = _read(m.source, m.xacro_args, **files)
         groups[m.group] = [m.prefix + j.get("name") for j in arm_root.findall("joint") if j.get("type") != "fixed"]
         if m.end_effectors is not None:
             ees = list(m.end_effectors)
@@ -153,17 +157,22 @@ def mount(
         else:
             ees = list(resolve_robot(m.source)[1].get("end_effectors", []))
         end_effectors += [m.prefix + e for e in ees]
-    load_options.setdefault("groups", groups)
+    if "groups" not in load_options:  # the groups made up here keep the members a user chose to solve
+        load_options.update(groups=groups, strict_groups=False)
     load_options.setdefault("end_effectors", end_effectors or None)
-    return robot_from_urdf(text, name=name or base_root.get("name"), **load_options)
+    return robot_from_urdf(text, name=name or base_root.get("name"), package_dirs=files.get("package_dirs", ()),
+                           **load_options)
 
 
-def _read(source: str | Path, xacro_args: Mapping[str, str] | None = None) -> tuple[ET.Element, Path | None]:
+def _read(source: str | Path, xacro_args: Mapping[str, str] | None = None, *,
+          package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (),
+          trusted: bool = False) -> tuple[ET.Element, Path | None]:
     """Parse an index name, a file path or URDF text; also return the file's directory (for mesh paths)."""
     if isinstance(source, str) and "<robot" in source:
         return parse_urdf(source), None
     path, _ = resolve_robot(source)
-    return parse_urdf(read_robot_file(path, xacro_args=xacro_args), str(path)), path.parent
+    text = read_robot_file(path, xacro_args=xacro_args, package_dirs=package_dirs, trusted=trusted)
+    return parse_urdf(text, str(path)), path.parent
 
 
 def _prefixed(root: ET.Element, prefix: str, directory: Path | None) -> ET.Element:

@@ -20,6 +20,8 @@ import pinocchio as pin
 
 from ..errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from ..resources import data_dir
+from .xacro_files import package_folders
+from .roles import mobile_base, segment_names
 from .floating import expand as expand_floating, floating_joints, with_floating_joints
 from .bounds import default_bounds, override_bounds
 from .joints import JointKind, build_joints
@@ -52,7 +54,7 @@ def load_robot(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     xacro_args: Mapping[str, str] | None = None,
     unbounded_translation: float = 2.0,
-    package_dirs: Sequence[str | Path] = (),
+    package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (),
     trusted: bool = False,
     floating_base: bool = False,
     quaternion: str | None = None,
@@ -68,8 +70,9 @@ def load_robot(
         bounds: search bounds to override, coordinate or joint name -> (lower, upper).
         xacro_args: xacro arguments, for ``.xacro`` files.
         unbounded_translation: half-width [m] of the search box of unbounded translations (planar bases).
-        package_dirs: folders holding ROS packages, for ``$(find pkg)`` in xacro files (``ROS_PACKAGE_PATH`` and
-            ``AMENT_PREFIX_PATH`` are searched after them).
+        package_dirs: folders holding ROS packages (or ``{package name: folder}`` for packages named unlike their
+            folders), relative to the working folder: for ``$(find pkg)`` in xacro files and ``package://`` meshes
+            (``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH`` are searched after them).
         trusted: let xacro read environment variables and YAML files and evaluate ``$(eval)`` (robot files are
             data by default: see :mod:`framework.model.xacro_files`).
         floating_base: add a free-flyer above the root link, solved as six coordinates (``root_joint_x`` ...
@@ -80,6 +83,7 @@ def load_robot(
     """
     path, entry = resolve_robot(source)
     name = str(source) if entry else path.name.split(".")[0]
+    package_dirs = package_folders(package_dirs)
     text = read_robot_file(path, xacro_args=xacro_args, package_dirs=package_dirs, trusted=trusted)
     return robot_from_urdf(
         text,
@@ -94,6 +98,7 @@ def load_robot(
         strict_groups=groups is not None,  # the index's groups shrink to the joints a user chose to solve
         floating_base=floating_base,
         quaternion=quaternion,
+        package_dirs=package_dirs,
     )
 
 
@@ -113,7 +118,7 @@ def resolve_robot(source: str | Path) -> tuple[Path, Mapping]:
 
 
 def read_robot_file(path: Path, *, xacro_args: Mapping[str, str] | None = None,
-                    package_dirs: Sequence[str | Path] = (), trusted: bool = False) -> str:
+                    package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (), trusted: bool = False) -> str:
     """URDF text of a ``.urdf`` file or an expanded ``.xacro`` file (see :mod:`framework.model.xacro_files`: robot
     files are data unless ``trusted``; ``$(find pkg)`` resolves in ``package_dirs``)."""
     path = Path(path)
@@ -189,6 +194,7 @@ def robot_from_urdf(
     strict_groups: bool = True,
     floating_base: bool = False,
     quaternion: str | None = None,
+    package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (),
 ) -> Robot:
     """Build a :class:`Robot` from URDF text. Arguments as :func:`load_robot` (``strict_groups``: every member of
     ``groups`` must be a solved joint)."""
@@ -235,6 +241,7 @@ def robot_from_urdf(
         locked=locked_values,
         source=source,
         mimics=mimics,
+        package_dirs=package_folders(package_dirs),
     )
     robot = _with_groups(robot, groups, strict=strict_groups)
     return robot
@@ -359,7 +366,7 @@ TOOL_NAMES = tuple(re.compile(p, re.IGNORECASE) for p in (r"tcp|tool_frame|end_?
 
 def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:
     """Default end-effectors: for each solved joint without a solved descendant (a chain's end; wheels and
-    casters — chains of continuous joints only, or a continuous end carrying a wheel frame — left out), its tool
+    casters — chains of one or two continuous joints only, or a continuous end carrying a wheel frame — left out), its tool
     frame by name (:data:`TOOL_NAMES`); a chain end without one (a finger, a gripper jaw) gives the tool frame of
     its nearest solved ancestor that has one, looking up to the first joint where chains branch (a hand's fingers
     all give the hand's grasp frame, once); else the chain end's last body frame. Sensor frames never."""
@@ -376,8 +383,8 @@ def _leaf_frames(model: pin.Model, joints: Sequence) -> list[str]:
         if jid in has_solved_child:
             continue
         chain = [solved[a] for a in ancestors[jid] if a in solved] + [joint]
-        if all(j.kind is JointKind.CONTINUOUS for j in chain):
-            continue  # a wheel or a caster: continuous joints all the way from the root
+        if all(j.kind is JointKind.CONTINUOUS for j in chain) and len(chain) <= 2:
+            continue  # a wheel or a caster: one or two continuous joints from the root (a leg has more)
         if joint.kind is JointKind.CONTINUOUS and any(WHEEL_NAMES.search(f.name) for f in _frames_on(model, jid)):
             continue  # a wheel on a suspension
         ends.append(jid)
@@ -417,10 +424,10 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
 
     Given groups must name solved joints (``strict``; a robot index's groups keep the members that are solved).
 
-    Derived groups: a mobile base (a planar joint, or the six joints of a floating base) is ``"base"``; the other
-    joints on the same set of end-effector chains form one group — the joints several chains share (a torso), and
-    each chain's own joints (an arm) — named after the link of its first joint (``"torso_lift_link"``,
-    ``"l_shoulder_pan_link"``).
+    Derived groups (:mod:`framework.model.roles`): a mobile base (a planar joint, a floating base's six joints, or
+    horizontal prismatic joints with a vertical turn, leading every chain) is ``"base"``; the other joints on the
+    same set of end-effector chains form one group — the joints several chains share (``"torso"``), and each
+    chain's own joints, named by role and side (``"arm"``, ``"left_arm"``, ``"head"``, ``"front_left_leg"``, ...).
     """
     from dataclasses import replace
 
@@ -446,9 +453,9 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
                 jid = model.parents[jid]
             chains.append(chain[::-1])
         floating = floating_joints(robot.joint_names)
-        base = [j for chain in chains for j in chain if robot.joint(j).kind is JointKind.PLANAR or j in floating]
-        if base:  # a mobile base (planar or floating joints) is one group, whatever the chains
-            result["base"] = _coords(robot, list(dict.fromkeys(base)))
+        base = mobile_base(robot, chains, floating)
+        if base:  # a mobile base is one group, whatever the chains
+            result["base"] = _coords(robot, base)
         owners: dict[str, frozenset[int]] = {}  # joint -> the chains it is on
         for k, chain in enumerate(chains):
             for joint in chain:
@@ -459,19 +466,11 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
                 members = segments.setdefault(owners[joint], [])
                 if joint not in members and joint not in base:
                     members.append(joint)
-        for keys, members in segments.items():
-            if members:
-                name = _link_of(robot, members[0])
-                result[name if name not in result else f"{name}:{robot.end_effectors[min(keys)]}"] = \
-                    _coords(robot, members)
+        segments = {keys: members for keys, members in segments.items() if members}
+        names = segment_names(robot, chains, list(segments))
+        for (keys, members), name in zip(segments.items(), names):
+            result[name] = _coords(robot, members)
     return replace(robot, groups=result)
-
-
-def _link_of(robot: Robot, joint: str) -> str:
-    """The link a joint moves (its first body frame), or the joint's name."""
-    jid = robot.model.getJointId(joint)
-    return next((f.name for f in robot.model.frames if f.parentJoint == jid and f.type == pin.FrameType.BODY), joint)
-
 
 
 def _coords(robot: Robot, joint_names: Sequence[str]) -> np.ndarray:

@@ -42,6 +42,8 @@ class Robot:
         urdf: the URDF text the model was built from (for viewers and recordings), with locked joints kept.
         locked: locked joint name -> value in joint coordinates.
         mimics: joints of the model that follow a solved joint (URDF ``<mimic>``), in Pinocchio order.
+        package_dirs: where its ROS packages are (absolute folders, or ``{package name: folder}``): what found its
+            xacro includes also finds its meshes (recordings, meshcat).
     """
 
     name: str
@@ -55,6 +57,7 @@ class Robot:
     locked: Mapping[str, float] = field(default_factory=dict, repr=False)
     source: str | None = field(default=None, repr=False)
     mimics: tuple[Joint, ...] = field(default=(), repr=False)
+    package_dirs: tuple | Mapping = field(default=(), repr=False)
     #: compiled-kinematics programs and packed layouts, built on first use (not part of the robot's value)
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 

@@ -7,7 +7,7 @@ lists, dicts, arithmetic, comparisons, conditionals, the properties and argument
 functions and a few pure builtins (``min``, ``max``, ``abs``, ``round``, ``len``, ...); no attribute of any other
 object, no name or attribute starting with ``_``. ``$(env)``, ``$(optenv)``, ``$(eval)`` and
 ``xacro.load_yaml`` need ``trusted=True``. ``$(find pkg)`` resolves in ``package_dirs`` (a package is a folder
-named like it, or holding a ``package.xml`` naming it), then ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH`` when set.
+named like it, or holding a ``package.xml`` naming it; or ``{package name: folder}``), then ``ROS_PACKAGE_PATH`` / ``AMENT_PREFIX_PATH`` when set.
 An argument given that the files do not declare (``<xacro:arg name=...>``) is an error.
 """
 
@@ -38,12 +38,14 @@ def declared_arguments(paths: Sequence[Path]) -> set[str]:
 
 
 def expand_xacro(path: Path, *, xacro_args: Mapping[str, Any] | None = None,
-                 package_dirs: Sequence[str | Path] = (), trusted: bool = False) -> str:
+                 package_dirs: Sequence[str | Path] | Mapping[str, str | Path] = (), trusted: bool = False) -> str:
     """URDF text of the xacro file ``path`` (see the module docstring for what an expression may do), expanded
     in a process of its own (:mod:`~framework.model.xacro_process`: xacro's globals are replaced there, not here)."""
     args = {k: str(v) for k, v in (xacro_args or {}).items()}
-    request = {"path": str(path), "args": args, "package_dirs": [str(Path(p).resolve()) for p in package_dirs],
-               "trusted": bool(trusted)}
+    folders = package_folders(package_dirs)
+    request = {"path": str(path), "args": args, "trusted": bool(trusted),
+               "package_dirs": {k: str(v) for k, v in folders.items()} if isinstance(folders, Mapping)
+               else [str(f) for f in folders]}
     done = subprocess.run([sys.executable, xacro_process.__file__], input=json.dumps(request), capture_output=True,
                           text=True, check=False)
     try:
@@ -60,10 +62,27 @@ def expand_xacro(path: Path, *, xacro_args: Mapping[str, Any] | None = None,
     return answer["urdf"]
 
 
-def find_package(name: str, package_dirs: Sequence[str | Path]) -> Path:
+def package_folders(package_dirs: Any) -> tuple[Path, ...] | dict[str, Path]:
+    """``package_dirs`` checked and made absolute (relative paths against the working folder): a sequence of
+    folders, or a mapping ``{package name: its folder}``; anything else is a :class:`RobotFileError`."""
+    if isinstance(package_dirs, (str, Path)):
+        package_dirs = [package_dirs]
+    if isinstance(package_dirs, Mapping):
+        if not all(isinstance(k, str) and isinstance(v, (str, Path)) for k, v in package_dirs.items()):
+            raise RobotFileError(f"package_dirs as a mapping is {{package name: folder}}; got {package_dirs!r}")
+        return {k: Path(v).resolve() for k, v in package_dirs.items()}
+    try:
+        folders = tuple(Path(p).resolve() for p in package_dirs)
+    except TypeError:
+        raise RobotFileError(f"package_dirs must be folders or {{package name: folder}}; got {package_dirs!r}") \
+            from None
+    return folders
+
+
+def find_package(name: str, package_dirs: Any) -> Path:
     """The folder of ROS package ``name`` (:func:`framework.model.xacro_process.find_package`), or a
     :class:`RobotFileError`."""
     try:
-        return xacro_process.find_package(name, package_dirs)
+        return xacro_process.find_package(name, package_folders(package_dirs))
     except xacro_process.RobotFileError as err:
         raise RobotFileError(str(err)) from None

@@ -104,12 +104,23 @@ class _Namespace:
         self.__dict__.update(members)
 
 
-def find_package(name: str, package_dirs: Sequence[str | Path]) -> Path:
-    """The folder of ROS package ``name``: in ``package_dirs`` (each a package itself, or holding packages, to any
-    depth), then the folders of ``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH/share``."""
-    roots = [Path(p) for p in package_dirs]
+def find_package(name: str, package_dirs: Sequence[str | Path] | Mapping[str, str | Path]) -> Path:
+    """The folder of ROS package ``name``: given by name in ``package_dirs`` (a mapping ``{package: folder}``), or
+    found in its folders (each a package itself, or holding packages, to any depth), then in the folders of
+    ``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH/share``. Not found: an error listing the folders searched and the
+    package names seen closest to ``name``."""
+    if isinstance(package_dirs, Mapping):
+        if name in package_dirs:
+            folder = Path(package_dirs[name])
+            if folder.is_dir():
+                return folder
+            raise RobotFileError(f"ROS package {name!r}: its folder {folder} (package_dirs) does not exist")
+        roots = [Path(p).parent for p in package_dirs.values()]
+    else:
+        roots = [Path(p) for p in package_dirs]
     roots += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
     roots += [Path(p) / "share" for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
+    seen: set[str] = set(package_dirs) if isinstance(package_dirs, Mapping) else set()
     for root in roots:
         if not root.is_dir():
             continue
@@ -118,19 +129,28 @@ def find_package(name: str, package_dirs: Sequence[str | Path]) -> Path:
         for manifest in sorted(root.rglob("package.xml")):
             if _is_package(manifest.parent, name):
                 return manifest.parent
+            seen.add(_package_name(manifest) or manifest.parent.name)
         candidate = root / name
         if candidate.is_dir():
             return candidate
-    searched = ", ".join(str(r) for r in roots) or "nothing (give package_dirs=[...])"
-    raise RobotFileError(f"ROS package {name!r} not found; searched {searched}")
+        seen.update(child.name for child in root.iterdir() if child.is_dir())
+    searched = ", ".join(str(r) for r in roots) or "nothing (give package_dirs=[folder, ...])"
+    import difflib
+
+    close = difflib.get_close_matches(name, sorted(seen), n=3, cutoff=0.5)
+    hint = (f"; closest package names seen: {', '.join(close)} (a package named unlike its folder: "
+            f"package_dirs={{{name!r}: folder}})") if close else ""
+    raise RobotFileError(f"ROS package {name!r} not found; searched {searched}{hint}")
+
+
+def _package_name(manifest: Path) -> str | None:
+    match = re.search(r"<name>\s*([^<\s]+)\s*</name>", manifest.read_text(errors="replace"))
+    return match.group(1) if match else None
 
 
 def _is_package(folder: Path, name: str) -> bool:
     manifest = folder / "package.xml"
-    if manifest.is_file():
-        match = re.search(r"<name>\s*([^<\s]+)\s*</name>", manifest.read_text(errors="replace"))
-        return bool(match) and match.group(1) == name
-    return False
+    return manifest.is_file() and _package_name(manifest) == name
 
 
 @contextmanager

@@ -16,10 +16,13 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+
+from ..errors import RobotFileError
+from ..model.xacro_files import find_package
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..model.robot import Robot
@@ -157,7 +160,7 @@ def robot_visuals(robot: Robot) -> tuple[tuple[Visual, ...], tuple[str, ...]]:
             if material is not None:
                 rgba = _rgba(material) or materials.get(material.get("name"))
             if shape.tag == "mesh":
-                path = resolve_mesh(shape.get("filename", ""), base_dir)
+                path = resolve_mesh(shape.get("filename", ""), base_dir, robot.package_dirs)
                 if path is None:
                     missing.append(shape.get("filename", ""))
                     continue
@@ -185,12 +188,19 @@ def robot_visuals(robot: Robot) -> tuple[tuple[Visual, ...], tuple[str, ...]]:
     return tuple(visuals), tuple(dict.fromkeys(missing))
 
 
-def resolve_mesh(filename: str, base_dir: Path | None = None) -> Path | None:
-    """A local file for a URDF mesh path (absolute, relative, ``file://`` or ``package://``), or None."""
+def resolve_mesh(filename: str, base_dir: Path | None = None, package_dirs: Any = ()) -> Path | None:
+    """A local file for a URDF mesh path (absolute, relative, ``file://`` or ``package://``), or None; a package is
+    looked for in ``package_dirs`` first (as the robot's xacro includes were), then beside the file and in the ROS
+    environment."""
     filename = filename.removeprefix("file://")
     if filename.startswith("package://"):
         package, _, rest = filename[len("package://") :].partition("/")
         candidates = []
+        if package_dirs:
+            try:
+                candidates.append(find_package(package, package_dirs) / rest)
+            except RobotFileError:
+                pass
         if base_dir is not None:
             for ancestor in [base_dir, *base_dir.parents]:
                 if ancestor.name == package:

@@ -121,3 +121,13 @@ def settings_markdown(name: str, result: IKResult, problem: Problem | None) -> s
     lines += [f"- {k}: {v}" for k, v in result.settings.items()]
     lines += ["", f"configuration: {np.array2string(np.asarray(result.configuration), precision=6)}"]
     return "\n".join(lines)
+
+
+def robot_markdown(robot: Robot, missing: list[str]) -> list[str]:
+    """The lines of a recording's robot page: coordinates, end-effectors, groups, and the meshes not found."""
+    lines = [f"# {robot.name}", "", f"{robot.n} joint coordinates: {', '.join(robot.coordinate_names)}", "",
+             f"end-effectors: {', '.join(robot.end_effectors)}", "",
+             "groups: " + ", ".join(f"{g} {np.asarray(i).tolist()}" for g, i in robot.groups.items())]
+    if missing:
+        lines += ["", "meshes not found locally (drawn as segments only): " + ", ".join(missing)]
+    return lines

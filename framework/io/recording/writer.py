@@ -12,7 +12,7 @@ import numpy as np
 
 from ...errors import RecordingError
 from ...geometry.scene import Scene
-from .content import (OBSTACLE_COLOR, SPHERE_COLOR, desired_paths, entity_name, mesh_bytes, reach_of, rgb255,
+from .content import (OBSTACLE_COLOR, robot_markdown, SPHERE_COLOR, desired_paths, entity_name, mesh_bytes, reach_of, rgb255,
                       settings_markdown, target_points)
 from ...viz.drawing import (
     DESIRED_COLOR,
@@ -158,20 +158,11 @@ class Recorder:
                     rr.Ellipsoids3D(half_sizes=[np.repeat(visual.size[0], 3)], colors=[color]),
                     static=True,
                 )
-        lines = [
-            f"# {robot.name}",
-            "",
-            f"{robot.n} joint coordinates: {', '.join(robot.coordinate_names)}",
-            "",
-            f"end-effectors: {', '.join(robot.end_effectors)}",
-            "",
-            "groups: " + ", ".join(f"{g} {np.asarray(i).tolist()}" for g, i in robot.groups.items()),
-        ]
         if self.drawing.missing:
-            lines += [
-                "",
-                "meshes not found locally (drawn as segments only): " + ", ".join(self.drawing.missing),
-            ]
+            warnings.warn(f"{robot.name}: {len(self.drawing.missing)} meshes not found (drawn as segments), e.g. "
+                          f"{self.drawing.missing[0]}; give load_robot the folders of its packages (package_dirs=)",
+                          stacklevel=3)
+        lines = robot_markdown(robot, self.drawing.missing)
         stream.log("robot", rr.TextDocument("\n".join(lines), media_type=rr.MediaType.MARKDOWN), static=True)
         if description:
             stream.log(
