@@ -13,6 +13,8 @@ the engine takes its last steps when the fatter spheres keep it from the task.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import warnings
 from collections.abc import Sequence
 
@@ -301,6 +303,12 @@ class SelfCollision(Term):
     """
 
     task_type, task_keys = "self_collision", ("margin",)
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'margin': "clearance [m] kept between the robot's own links (default 0)"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('youbot_dual_mobile', 'type = "self_collision"\nmargin = 0.01')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> SelfCollision:
@@ -410,6 +418,12 @@ class Obstacles(Term):
     """
 
     task_type, task_keys = "obstacles", ("margin",)
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'margin': "clearance [m] kept from the file's [[obstacles]] (default 0)"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "obstacles"\nmargin = 0.02\n\n[[obstacles]]\ntype = "box"\ncenter = [0.6, 0.0, -0.1]\nsize = [0.4, 0.4, 0.05]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Obstacles:

@@ -3,6 +3,8 @@ support polygon of a humanoid's feet: the ``xy`` axes)."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -95,6 +97,13 @@ class CenterOfMass(Term):
     """
 
     task_type, task_keys = "center_of_mass", ("target", "axes")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'target': "the centre of mass's target [m, world] (3 numbers; those off axes are not held)",
+        'axes': 'which world axes are held, a subset of "xyz" (default "xyz")'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('pybullet_data/kuka_iiwa/model.urdf', 'type = "center_of_mass"\ntarget = [0.1, 0.0, 0.0]\naxes = "xy"')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> CenterOfMass:

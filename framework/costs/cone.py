@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -56,6 +58,15 @@ class Cone(Direction):
     """
 
     task_type, task_keys = "cone", ("frame", "direction", "axis", "max_angle")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame whose axis is held',
+        'direction': "the cone's axis [world] (3 numbers)",
+        'axis': "the frame's axis [frame] (default [0, 0, 1])",
+        'max_angle': "the cone's half angle [rad]"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "cone"\nframe = "ee"\ndirection = [0, 0, -1]\nmax_angle = "pi/8"')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Cone:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -119,6 +121,14 @@ class Direction(Term):
     """
 
     task_type, task_keys = "direction", ("frame", "direction", "axis")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame whose axis is aimed',
+        'direction': 'the direction [world] (3 numbers)',
+        'axis': "the frame's axis [frame] (default [0, 0, 1])"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "direction"\nframe = "ee"\ndirection = [0, 0, -1]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Direction:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -84,6 +86,17 @@ class Distance(Term):
     """
 
     task_type, task_keys = "distance", ("frame", "to_frame", "to_point", "at_least", "at_most", "exactly")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame measured from',
+        'to_frame': 'another frame (or to_point)',
+        'to_point': 'a point [m, world] (or to_frame)',
+        'at_least': 'lower bound [m]',
+        'at_most': 'upper bound [m]',
+        'exactly': 'the distance [m] (instead of bounds)'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "distance"\nframe = "ee"\nto_point = [0, 0, 0]\nat_least = 0.3')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Distance:

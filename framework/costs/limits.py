@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -44,6 +46,9 @@ class JointLimitPenalty(Term):
     """
 
     task_type, task_keys = "joint_limits", ()
+    task_doc: ClassVar[dict[str, str]] = {}
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "joint_limits"\nweight = 0.001')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> JointLimitPenalty:

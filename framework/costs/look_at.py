@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -63,6 +65,14 @@ class LookAt(Term):
     """
 
     task_type, task_keys = "look_at", ("frame", "point", "axis")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame that looks',
+        'point': 'the point looked at [m, world]',
+        'axis': "the frame's viewing axis [frame] (default [0, 0, 1])"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "look_at"\nframe = "ee"\npoint = [0.5, 0.2, 0.0]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> LookAt:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -64,6 +66,14 @@ class Motion(Term):
     """
 
     task_type, task_keys, category = "motion", ("group", "previous", "norm"), "motion"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'group': 'a joint group, a joint, or "all"',
+        'previous': 'the configuration measured from (default: [previous], the previous waypoint on a path)',
+        'norm': '"l2" (default) or "l1" (paper 002\'s normalized L1)'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "motion"\ngroup = "arm"\nweight = 0.1')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Motion:
@@ -149,6 +159,13 @@ class JointTarget(Motion):
     """
 
     task_type, task_keys, category = "joint_target", ("group", "target"), None
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'group': 'a joint group, a joint, or "all"',
+        'target': 'its joint values [rad or m]'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "joint_target"\ngroup = "joint6"\ntarget = [0.5]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> JointTarget:

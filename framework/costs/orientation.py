@@ -8,7 +8,7 @@ A quaternion target given as 4 numbers names its order (``quaternion="xyzw"`` or
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -89,6 +89,14 @@ class Orientation(Term):
     """
 
     task_type, task_keys, category = "orientation", ("frame", "target", "quaternion"), "orientation"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame turned',
+        'target': 'its rotation [world]: a 3x3 matrix, an expression such as "Ry(pi/2)", or 4 numbers with quaternion',
+        'quaternion': 'the order of 4 numbers: "xyzw" or "wxyz"'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "orientation"\nframe = "ee"\ntarget = "Ry(pi/2)"')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Orientation:

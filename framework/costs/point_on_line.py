@@ -3,6 +3,8 @@ free along it."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -64,6 +66,14 @@ class PointOnLine(Term):
     has_target = True
     fixed_layout = True
     task_type, task_keys, category = "point_on_line", ("frame", "point", "direction"), "position"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame held on the line',
+        'point': 'a point of the line [m, world]',
+        'direction': "the line's direction [world]"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "point_on_line"\nframe = "ee"\npoint = [0.4, 0.0, 0.3]\ndirection = [0, 1, 0]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> PointOnLine:

@@ -3,6 +3,8 @@ within it."""
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -57,6 +59,14 @@ class PointOnPlane(Term):
     has_target = True
     fixed_layout = True
     task_type, task_keys, category = "point_on_plane", ("frame", "point", "normal"), "position"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame held on the plane',
+        'point': 'a point of the plane [m, world]',
+        'normal': "the plane's normal [world]"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "point_on_plane"\nframe = "ee"\npoint = [0.0, 0.0, 0.3]\nnormal = [0, 0, 1]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> PointOnPlane:

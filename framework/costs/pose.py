@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Callable
 
 import numpy as np
@@ -68,6 +70,15 @@ class Pose(Term):
     """
 
     task_type, task_keys = "pose", ("frame", "position", "rotation", "quaternion")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame placed',
+        'position': 'its target position [m, world]',
+        'rotation': "its target rotation [world] (as orientation's target)",
+        'quaternion': 'the order of 4 numbers: "xyzw" or "wxyz"'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "pose"\nframe = "ee"\nposition = [0.4, 0.1, 0.3]\nrotation = [0, 0.7071068, 0, 0.7071068]\nquaternion = "xyzw"')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Pose:

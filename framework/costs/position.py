@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -57,6 +59,13 @@ class Position(Term):
     """
 
     task_type, task_keys, category = "position", ("frame", "target"), "position"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame': 'the frame placed',
+        'target': 'its target position [m, world]'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('puma560', 'type = "position"\nframe = "ee"\ntarget = [0.4, 0.1, 0.3]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> Position:

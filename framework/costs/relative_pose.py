@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from ..compiled.native import matrix
@@ -90,6 +92,16 @@ class RelativePose(Term):
     """
 
     task_type, task_keys = "relative_pose", ("frame_a", "frame_b", "offset", "offset_rotation", "quaternion")
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame_a': 'the frame measured in',
+        'frame_b': 'the frame held',
+        'offset': "frame_b's position in frame_a [m]",
+        'offset_rotation': "frame_b's rotation in frame_a (default the identity; as orientation's target)",
+        'quaternion': 'the order of 4 numbers: "xyzw" or "wxyz"'
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('youbot_dual', 'type = "relative_pose"\nframe_a = "arm1_ee"\nframe_b = "arm2_ee"\noffset = [0.0, 0.0, 0.2]\noffset_rotation = "Rx(pi)"')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> RelativePose:

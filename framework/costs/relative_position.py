@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -50,6 +52,14 @@ class RelativePosition(Term):
     """
 
     task_type, task_keys, category = "relative_position", ("frame_a", "frame_b", "offset"), "position"
+    #: the entry's keys, for the task-file reference (docs/taskfile.md)
+    task_doc: ClassVar[dict[str, str]] = {
+        'frame_a': 'the first frame',
+        'frame_b': 'the second frame',
+        'offset': "frame_b's position minus frame_a's [m, world]"
+    }
+    #: a robot, and an entry of this type for it (checked by tests/test_taskfile_doc.py)
+    task_example: ClassVar[tuple[str, str]] = ('youbot_dual', 'type = "relative_position"\nframe_a = "arm1_ee"\nframe_b = "arm2_ee"\noffset = [0.0, 0.3, 0.0]')
 
     @classmethod
     def from_entry(cls, entry: TermEntry) -> RelativePosition:
