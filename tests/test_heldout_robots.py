@@ -87,3 +87,27 @@ def test_a_package_named_unlike_its_folder_says_what_it_saw():
     with pytest.raises(fw.RobotFileError, match="kuka_kr6_support.*not found; searched .*kuka_description.*"
                                                  "closest package names seen: kuka_kr6.*package_dirs="):
         fw.load_robot(ROBOTS["kr6"][0], package_dirs=[KUKA])
+
+
+def test_show_and_reach_take_the_options_load_robot_takes(capsys):
+    """The command line loads a robot as Python does: --package-dir PKG=FOLDER for the KR6's packages, and shows
+    its groups by role, end-effectors and frames."""
+    from framework.cli import main
+
+    kr6 = str(ROBOTS["kr6"][0])
+    assert main(["show", kr6, "--package-dir", f"kuka_kr6_support={KUKA / 'kuka_kr6'}",
+                 "--package-dir", f"kuka_resources={KUKA / 'kuka_resources'}"]) == 0
+    out = capsys.readouterr().out
+    assert "groups: arm (joint_a1" in out and "end-effectors: tool0" in out and "frames (9): base_link" in out
+    assert main(["show", kr6]) == 2  # without the packages: the error says what it searched
+    assert "kuka_kr6_support" in capsys.readouterr().err
+
+
+def test_a_urdf_holding_xacro_and_a_folder_say_what_to_do(tmp_path):
+    from tests.fuzz.escapes import ARM
+
+    (tmp_path / "arm.urdf").write_text(ARM.replace("EXTRA", ""))
+    with pytest.raises(fw.RobotFileError, match="holds xacro.*name the file .urdf.xacro"):
+        fw.load_robot(tmp_path / "arm.urdf")
+    with pytest.raises(fw.RobotFileError, match="is a folder: give the URDF or xacro file.*holds arm.urdf"):
+        fw.load_robot(tmp_path)

@@ -41,6 +41,8 @@ def solvers_command(args, console: Console) -> int:
 
 
 def show_command(args, console: Console) -> int:
+    import pinocchio as pin
+
     from .robots import load_robot_of
 
     robot = load_robot_of(args)
@@ -58,6 +60,13 @@ def show_command(args, console: Console) -> int:
     console.print(table)
     if robot.locked:
         console.print("locked: " + ", ".join(f"{k}={v:.4g}" for k, v in robot.locked.items()))
+    console.print("groups: " + ("; ".join(
+        f"{g} ({', '.join(robot.coordinate_names[i] for i in idx)})" for g, idx in robot.groups.items()) or "none"),
+        highlight=False)
+    console.print(f"end-effectors: {', '.join(robot.end_effectors) or 'none'}", highlight=False)
+    frames = [f.name for f in robot.model.frames
+              if f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME) and f.name != "universe"]
+    console.print(f"frames ({len(frames)}): {', '.join(frames)}", highlight=False)
     return EXIT_OK
 
 

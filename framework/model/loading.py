@@ -107,6 +107,11 @@ def resolve_robot(source: str | Path) -> tuple[Path, Mapping]:
     path = Path(source)
     if path.is_file():
         return path, {}
+    if path.is_dir():
+        files = sorted(p.name for p in path.iterdir() if p.name.endswith((".urdf", ".xacro")))
+        raise RobotFileError(f"{path} is a folder: give the URDF or xacro file of the robot"
+                             + (f" (it holds {', '.join(files[:8])}{', ...' if len(files) > 8 else ''})"
+                                if files else " (it holds no .urdf or .xacro file)"))
     index = robot_index()
     if str(source) in index:
         return data_dir("robots") / index[str(source)]["file"], index[str(source)]
@@ -136,6 +141,10 @@ def read_robot_file(path: Path, *, xacro_args: Mapping[str, str] | None = None,
         raise RobotFileError(f"cannot read robot file {path}: {err}") from err
 
 
+#: The xacro namespace as ElementTree spells the tags in it.
+XACRO_NAMESPACE = "{http://www.ros.org/wiki/xacro}"
+
+
 def parse_urdf(text: str, what: str = "URDF") -> ET.Element:
     """The ``<robot>`` element of URDF text; raises :class:`RobotFileError` on malformed XML."""
     try:
@@ -144,6 +153,9 @@ def parse_urdf(text: str, what: str = "URDF") -> ET.Element:
         raise RobotFileError(f"malformed XML in {what}: {err}") from err
     if root.tag != "robot":
         raise RobotFileError(f"{what} is not a URDF: root element is <{root.tag}>, expected <robot>")
+    if any(str(e.tag).startswith(XACRO_NAMESPACE) for e in root.iter()):
+        raise RobotFileError(f"{what} holds xacro (xacro: elements): name the file .urdf.xacro (or .xacro) to have "
+                             "it expanded")
     if root.find("link") is None:
         raise RobotFileError(f"{what} has no <link>")
     _check_tree(root, what)
