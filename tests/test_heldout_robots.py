@@ -111,3 +111,15 @@ def test_a_urdf_holding_xacro_and_a_folder_say_what_to_do(tmp_path):
         fw.load_robot(tmp_path / "arm.urdf")
     with pytest.raises(fw.RobotFileError, match="is a folder: give the URDF or xacro file.*holds arm.urdf"):
         fw.load_robot(tmp_path)
+
+
+def test_mount_takes_the_loading_options_and_its_groups_follow_the_joints_solved(tmp_path):
+    """A mounted arm from a xacro set whose packages are named unlike their folders (package_dirs as a mapping);
+    solving only some joints keeps the groups mount makes, reduced to them."""
+    options = ROBOTS["kr6"][1]
+    arm = fw.Mount(str(ROBOTS["kr6"][0]), "platform", prefix="kr_", end_effectors=["tool0"])
+    robot = fw.mount(fw.planar_base_urdf(), [arm], **options)
+    assert {g: len(i) for g, i in robot.groups.items()} == {"base": 3, "kr": 6}
+    some = fw.mount(fw.planar_base_urdf(), [arm], joints=["base_x", "kr_joint_a1", "kr_joint_a2"], **options)
+    assert {g: len(i) for g, i in some.groups.items()} == {"base": 1, "kr": 2}
+    assert not RobotDrawing(robot).missing  # the arm's package:// meshes found through the same package_dirs
