@@ -86,10 +86,10 @@ def measure() -> dict:
     for name in PATHS:
         path = paper000(name)
         track(robot, path[:3], TrackingTask(**weights), solver="hybrid", initial=np.array(Q_PREV), progress=False,
-              **extra)
+              tolerance=1e-4, max_iterations=300, **extra)
         t = time.perf_counter()
         result = track(robot, path, TrackingTask(**weights), solver="hybrid", initial=np.array(Q_PREV),
-                       progress=False, **extra)
+                       progress=False, tolerance=1e-4, max_iterations=300, **extra)
         out["paths"][name] = {"seconds": time.perf_counter() - t, "points": len(result),
                               "max_error": float(result.position_error.max())}
     rng = np.random.default_rng(0)

@@ -336,9 +336,19 @@ def worker(root: str, inputs: str) -> None:
     import numpy as np
     import pinocchio as pin
 
+    import inspect
+
     import framework as fw
-    from framework.tracking import TrackingTask, paths, track
+    from framework.tracking import TrackingTask, track
     from tests.conftest import example_robot_data_dir
+
+    try:
+        from framework.tracking import paths
+    except ImportError:  # a baseline from before the folders by layer
+        from framework import trajectory as paths
+    # the same budget and tolerance in either checkout (their defaults and the budget's name changed)
+    budget = {("max_iterations" if "max_iterations" in inspect.signature(track).parameters
+               else "iterations_per_point"): 300, "tolerance": 1e-4}
 
     data = np.load(inputs)
     erd = example_robot_data_dir()
@@ -395,7 +405,7 @@ def worker(root: str, inputs: str) -> None:
         times, ok = [], []
         for _ in range(start, stop):
             t = time.perf_counter()
-            result = track(youbot, path, task)
+            result = track(youbot, path, task, **budget)
             times.append(time.perf_counter() - t)
             ok.append(bool(np.max(result.position_error) <= 1e-5))
         return times, ok
