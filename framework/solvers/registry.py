@@ -8,7 +8,7 @@ is an IK solver too (:class:`~framework.solvers.metaheuristic.Metaheuristic`); t
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from typing import Any, TypeVar
+from typing import TypeVar
 
 from ..errors import SolverError
 from ..optimizers.registry import ALGORITHMS, reserve
@@ -18,11 +18,6 @@ A = TypeVar("A", bound=type)
 
 #: Registered problem-level IK solvers, name -> class.
 IK_SOLVERS: dict[str, type] = {}
-#: IK solver instances by name and options (:func:`ik_solver`): a solver keeps no state between solves, only tables
-#: derived from its options, so a loop that passes the same options to every solve reuses one instance instead of
-#: validating them again (~12 µs a call, a third of a pose solve). Bounded: cleared beyond ``_MAX_INSTANCES``.
-_INSTANCES: dict[tuple, object] = {}
-_MAX_INSTANCES = 256
 
 
 def register_ik(name: str) -> Callable[[A], A]:
@@ -46,34 +41,9 @@ def solver_names() -> list[str]:
 def ik_solver(name: str, options=None):
     """An IK solver instance for ``name`` with ``options``; raises :class:`SolverError` listing the names.
 
-    Instances are made once per name and options (options of hashable values; others make a new instance)."""
+    Instances are made once per name and options (:meth:`~framework.solvers.ik.IKSolver.instance`)."""
     if name in IK_SOLVERS:
-        key = _instance_key(name, options)
-        made = _INSTANCES.get(key) if key is not None else None
-        if made is None:
-            made = IK_SOLVERS[name](options or None)
-            if key is not None:
-                if len(_INSTANCES) >= _MAX_INSTANCES:
-                    _INSTANCES.clear()
-                _INSTANCES[key] = made
-        return made
+        return IK_SOLVERS[name].instance(options)
     if name in ALGORITHMS:
         return Metaheuristic(name, options)
     raise SolverError(f"unknown solver {name!r}; available: {', '.join(solver_names())}")
-
-
-def _instance_key(name: str, options: Any) -> tuple | None:
-    """The key of ``name`` with ``options`` in the instance table, ``None`` when the options cannot be one (an
-    unhashable value). A value's type is part of it: ``{"stall": 6.0}`` is not ``{"stall": 6}`` (which one is
-    valid is the options' own check)."""
-    if not options:
-        return (name,)
-    try:
-        if isinstance(options, Mapping):
-            key = (name, tuple(sorted((k, type(v), v) for k, v in options.items())))
-        else:
-            key = (name, type(options), options)
-        hash(key)
-    except TypeError:
-        return None
-    return key
