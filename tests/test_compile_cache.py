@@ -13,6 +13,7 @@ import textwrap
 from pathlib import Path
 
 import numba
+import pytest
 
 from framework.compiled import cache as compile_cache
 
@@ -139,3 +140,24 @@ def test_the_notice_can_be_quiet(monkeypatch):
     add_two.__module__ = "framework.probe"
     assert numba.njit(add_two)(1.0) == 3.0
     assert stream.getvalue() == ""
+
+
+def test_many_small_compiles_are_announced_once_they_add_up():
+    """Compiles quicker than the notice's delay say nothing, until their silent time adds up to it: the next one
+    then says so as it begins (a first solve made of many small compiles is not a silent wait)."""
+    import io
+    import time
+
+    from framework.compiled.cache import CompileNotice
+
+    out = io.StringIO()
+    notice = CompileNotice(stream=out, after=0.3)
+    for k in range(3):
+        notice.start(f"probe.f{k}")
+        time.sleep(0.16)
+        notice.end()
+    said = out.getvalue()
+    assert "probe.f0" not in said  # 0.16 s: below the delay
+    assert said.startswith("metaik: compiling probe.f1") and said.rstrip().endswith(" s")  # 0.32 s in all
+    assert "probe.f2" not in said  # counting starts again after a notice
+    assert notice.seconds == pytest.approx(0.48, abs=0.1)

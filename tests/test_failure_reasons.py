@@ -60,6 +60,24 @@ def test_a_path_that_misses_waypoints_says_which(puma):
     result = track(puma, positions, TrackingTask(frame="ee", motion={}), progress=False)
     assert result.stop_reason == "completed" and result.success.tolist() == [True, True, False, False, True]
     assert result.reason.startswith("2 of 5 waypoints missed (k = 2-3); waypoint 2: position missed by ")
-    assert "beyond its reach" in result.reason
+    assert "the target is 2.04 m from ee's first joint" in result.reason  # waypoint 2's own target (2.0, 0, 0.4)
     whole = track(puma, positions[:2], TrackingTask(frame="ee", motion={}), progress=False)
     assert whole.reason == ""
+
+
+def test_a_path_of_pose_terms_reports_their_distance_and_angle(puma):
+    """A path tracked with a pose term (position and orientation in one term): the waypoints' position and
+    orientation errors are the pose's distance and sin(angle / 2), not zeros."""
+    R = pin.rpy.rpyToMatrix(0.0, np.pi / 2, 0.0)
+
+    def builder(k, position, rotation, previous):
+        return fw.Objective.of(fw.Pose("ee", pin.SE3(R, position)))
+
+    path = tr.Trajectory(np.array([[0.4, 0.1, 0.3], [1.8, 0.0, 0.3]]))
+    result = track(puma, path, builder, progress=False)
+    assert result.success.tolist() == [True, False]
+    missed = fw.solve(fw.Problem(puma, fw.Pose("ee", pin.SE3(R, path.positions[1]))),
+                      initial=result.configurations[0])
+    assert result.position_error[1] == pytest.approx(missed.errors["pose[ee].distance"], rel=1e-6)
+    assert result.position_error[1] > 0.5 and result.position_error[0] < 1e-6
+    assert result.orientation_error[1] == pytest.approx(np.sin(missed.errors["pose[ee].angle"] / 2), abs=1e-6)

@@ -25,7 +25,7 @@ KUKA = RTB / "kuka_description"
 #: name -> (file, load_robot options, frame to solve, expected groups)
 ROBOTS = {
     "iiwa": (PB / "kuka_iiwa" / "model.urdf", {}, "lbr_iiwa_link_7", {"arm": 7}),
-    "panda": (PB / "franka_panda" / "panda.urdf", {}, "panda_grasptarget", {"arm": 7}),
+    "panda": (PB / "franka_panda" / "panda.urdf", {}, "panda_grasptarget", {"arm": 7, "gripper": 1}),
     "xarm6": (PB / "xarm" / "xarm6_robot.urdf", {}, "link6", {"arm": 6}),
     "laikago": (PB / "laikago" / "laikago.urdf", {}, "FL_lower_leg",
                 {"front_left_leg": 3, "front_right_leg": 3, "rear_left_leg": 3, "rear_right_leg": 3}),
@@ -33,7 +33,7 @@ ROBOTS = {
             {"package_dirs": {"kuka_kr6_support": KUKA / "kuka_kr6", "kuka_resources": KUKA / "kuka_resources"}},
             "tool0", {"arm": 6}),
     "frankie_omni": (RTB / "qut_frankie_description" / "robots" / "frankieOmni_arm_hand.urdf.xacro",
-                     {"package_dirs": [RTB]}, "frankie_hand", {"base": 3, "arm": 7}),
+                     {"package_dirs": [RTB]}, "frankie_hand", {"base": 3, "arm": 7, "gripper": 1}),
 }
 
 
@@ -99,8 +99,10 @@ def test_show_and_reach_take_the_options_load_robot_takes(capsys):
                  "--package-dir", f"kuka_resources={KUKA / 'kuka_resources'}"]) == 0
     out = capsys.readouterr().out
     assert "groups: arm (joint_a1" in out and "end-effectors: tool0" in out and "frames (9): base_link" in out
-    assert main(["show", kr6]) == 2  # without the packages: the error says what it searched
+    assert main(["show", kr6]) == 2  # without the packages: the error says what it searched, and how to say it
     assert "kuka_kr6_support" in capsys.readouterr().err
+    mixed = ["--package-dir", f"kuka_kr6_support={KUKA / 'kuka_kr6'}", "--package-dir", str(KUKA)]  # one renamed
+    assert main(["show", kr6, *mixed]) == 0 and "groups: arm" in capsys.readouterr().out
 
 
 def test_a_urdf_holding_xacro_and_a_folder_say_what_to_do(tmp_path):

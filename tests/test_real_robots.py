@@ -83,16 +83,17 @@ def test_default_end_effectors_of_a_full_urdf_are_not_sensors(erd, path):
 
 @pytest.mark.parametrize("path, hands, groups", [
     ("pr2_description/urdf/pr2.urdf", ("l_gripper_tool_frame", "r_gripper_tool_frame"),
-     {"torso": 1, "head": 2, "left_arm": 7, "right_arm": 7}),
+     {"torso": 1, "head": 2, "left_arm": 7, "right_arm": 7, "left_gripper": 1, "right_gripper": 1}),
     ("tiago_description/robots/tiago_dual.urdf", ("hand_left_grasping_frame", "hand_right_grasping_frame"),
-     {"torso": 1, "left_arm": 7, "right_arm": 7, "head": 2}),
+     {"torso": 1, "left_arm": 7, "right_arm": 7, "head": 2, "left_gripper": 36, "right_gripper": 36}),
     ("baxter_description/urdf/baxter.urdf", ("left_gripper", "right_gripper"),
-     {"head": 1, "left_arm": 7, "right_arm": 7}),
+     {"head": 1, "left_arm": 7, "right_arm": 7, "left_gripper": 1, "right_gripper": 1}),
 ])
 def test_a_full_urdf_gives_hands_not_fingers_and_disjoint_groups(erd, path, hands, groups):
     """Every joint of the URDF solved: a hand's fingers (TIAGo: 5 chains per hand; PR2, Baxter: a gripper jaw) give
     the hand's tool frame once, wheels give none; groups are the joints on the same chains — the torso shared by
-    the arms and the head, each arm, the head — disjoint, named by role and side."""
+    the arms and the head, each arm, the head, the fingers on no hand's chain (grippers) — disjoint, named by role
+    and side."""
     robot = fw.load_robot(erd / path)
     assert set(hands) <= set(robot.end_effectors)
     assert not [f for f in robot.end_effectors if "finger" in f or "wheel" in f or "thumb" in f]

@@ -71,7 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                     "bench": bench_command, "reach": reach_command, "replay": replay_command}
         code = commands[args.command](args, console)
         compiling = compile_cache.NOTICE.seconds - compiled_before
-        if compiling > 0 and code != EXIT_INTERRUPTED:  # its time would be read as the solver's
+        if compiling >= 1.0 and code != EXIT_INTERRUPTED:  # its time would be read as the solver's
             Console(stderr=True).print(f"(the times above include {compiling:.0f} s of compiling, once per install)",
                                        highlight=False)
         return code

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..errors import TaskError
+from ..errors import RobotFileError, TaskError
 
 
 def add_robot_options(parser: argparse.ArgumentParser) -> None:
@@ -23,13 +23,15 @@ def load_robot_of(args: argparse.Namespace):
     """The robot ``args.robot`` loaded with the options of :func:`add_robot_options`."""
     from ..model.loading import load_robot
 
-    named = dict(_pair(v, "--package-dir") for v in args.package_dir if "=" in v)
-    folders = [v for v in args.package_dir if "=" not in v]
-    if named and folders:
-        raise TaskError("--package-dir: give folders, or PKG=FOLDER pairs, not both")
+    package_dirs = [dict([_pair(v, "--package-dir")]) if "=" in v else v for v in args.package_dir]
     xacro_args = dict(_pair(v, "--xacro-arg") for v in args.xacro_arg)
-    return load_robot(args.robot, package_dirs=named or folders, trusted=args.trusted,
-                      xacro_args=xacro_args or None)
+    try:
+        return load_robot(args.robot, package_dirs=package_dirs, trusted=args.trusted, xacro_args=xacro_args or None)
+    except RobotFileError as err:
+        if "package_dirs" not in str(err):
+            raise
+        raise RobotFileError(f"{err} (on the command line: --package-dir FOLDER, or --package-dir PKG=FOLDER)") \
+            from None
 
 
 def _pair(text: str, flag: str) -> tuple[str, str]:

@@ -242,8 +242,9 @@ class CompileNotice:
 
     A compile the package starts (one of its functions, with the others it calls) that is still running after
     :attr:`after` seconds is one line: ``metaik: compiling engine.reach.reach for this machine (first use, cached
-    afterwards) ... 12.3 s``; quicker ones (a kernel loaded from the cache, a small function) say nothing. Quiet
-    with ``METAIK_COMPILE_NOTICE=0``.
+    afterwards) ... 12.3 s``; quicker ones (a kernel loaded from the cache, a small function) say nothing, until
+    the silent ones add up to :attr:`after` seconds: the next compile then says so as it begins (a wait made of
+    many small compiles is announced too). Quiet with ``METAIK_COMPILE_NOTICE=0``.
     """
 
     def __init__(self, stream=None, after: float = 1.0):
@@ -254,6 +255,7 @@ class CompileNotice:
         self._start = 0.0
         self._timer: threading.Timer | None = None
         self._said = False
+        self._quiet = 0.0  # seconds of compiles that said nothing since the last that did
         self._held = None
         self.interrupt = None
 
@@ -267,7 +269,7 @@ class CompileNotice:
             self._start = time.perf_counter()
             self._said = False
             if os.environ.get("METAIK_COMPILE_NOTICE", "1") != "0":
-                self._timer = threading.Timer(self.after, self._say, (name, where))
+                self._timer = threading.Timer(max(0.0, self.after - self._quiet), self._say, (name, where))
                 self._timer.daemon = True
                 self._timer.start()
 
@@ -284,6 +286,9 @@ class CompileNotice:
                 self._timer = None
             if self._said:
                 self._write(f"{elapsed:.1f} s\n")
+                self._quiet = 0.0
+            else:
+                self._quiet += elapsed
             held.__exit__(None, None, None)  # raises KeyboardInterrupt if one was held
 
     def _say(self, name: str, where: str) -> None:

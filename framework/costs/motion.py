@@ -66,6 +66,8 @@ class Motion(Term):
     """
 
     task_type, task_keys, category = "motion", ("group", "previous", "norm"), "motion"
+    #: what the term's values are, in errors
+    values_are: ClassVar[str] = "previous configuration"
     #: the entry's keys, for the task-file reference (docs/taskfile.md)
     task_doc: ClassVar[dict[str, str]] = {
         'group': 'a joint group, a joint, or "all"',
@@ -96,9 +98,9 @@ class Motion(Term):
         try:
             previous = np.array(previous, dtype=float)
         except (TypeError, ValueError):
-            raise TaskError(f"previous configuration of group {self.group!r} must be numbers") from None
+            raise TaskError(f"{self.values_are} of group {self.group!r} must be numbers") from None
         if previous.ndim != 1 or not all_finite(previous):
-            raise TaskError(f"previous configuration of group {self.group!r} must be a finite vector")
+            raise TaskError(f"{self.values_are} of group {self.group!r} must be a finite vector")
         self.previous = previous
         self._touch()
 
@@ -118,10 +120,9 @@ class Motion(Term):
             return self.previous[idx]
         if self.previous.shape == (len(idx),):
             return self.previous
-        raise TaskError(
-            f"previous configuration of group {self.group!r} must have {len(idx)} (group) or {robot.n} (robot) "
-            f"values; got {self.previous.shape[0]}"
-        )
+        sizes = f"{len(idx)}" if len(idx) == robot.n else f"{len(idx)} (the group's) or {robot.n} (the robot's)"
+        raise TaskError(f"{self.values_are} of group {self.group!r} must have {sizes} values; got "
+                        f"{self.previous.shape[0]}")
 
     def validate(self, robot: Robot) -> None:
         self.previous_values(robot)
@@ -159,6 +160,7 @@ class JointTarget(Motion):
     """
 
     task_type, task_keys, category = "joint_target", ("group", "target"), None
+    values_are: ClassVar[str] = "joint target"
     #: the entry's keys, for the task-file reference (docs/taskfile.md)
     task_doc: ClassVar[dict[str, str]] = {
         'group': 'a joint group, a joint, or "all"',

@@ -212,8 +212,9 @@ def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
             options[key] = task[key]
     if "package_dirs" in task:  # relative to the task file
         given = task["package_dirs"]
-        options["package_dirs"] = ({k: path.parent / str(v) for k, v in given.items()} if isinstance(given, dict)
-                                   else [path.parent / str(p) for p in given])
+        options["package_dirs"] = [{k: path.parent / str(v) for k, v in item.items()} if isinstance(item, dict)
+                                   else path.parent / str(item) for item in ([given] if isinstance(given, dict)
+                                                                              else given)]
     if "bounds" in task:
         options["bounds"] = {k: _bound_pair(evaluate(v, {}, f"[task] bounds.{k}"), f"[task] bounds.{k}")
                              for k, v in task["bounds"].items()}

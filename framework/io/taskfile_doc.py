@@ -58,6 +58,18 @@ def reference() -> str:
            "ones.", ""]
     out += _keys_table("`[task]`", {**TASK_KEYS, **ROBOT_KEYS}, MEANINGS)
     out += _keys_table("`[solver]`", SOLVER_KEYS, {**MEANINGS, **SOLVER_MEANINGS})
+    out += ["## `[[cases]]` and `[previous]`", "",
+             "Each `[[cases]]` entry is one solve: a `name`, and variables (every other key) the terms' values may "
+             "use by name (`target = \"p\"` with `p = [0.4, 0.1, 0.3]` in a case). Without `[[cases]]` the file is "
+             "one case named after the task. `[previous]` gives the configuration before each case, joint group by "
+             "joint group (`arm = [0, 0.5, ...]`; default: the middle of the bounds): motion terms measure from it "
+             "(a `motion` term without `previous`), and a path starts from it.", "",
+             "## Paths", "",
+             "A `[trajectory]` table (or a case's `trajectory = {...}`) makes the file a tracking task, one solve per "
+             "waypoint: the terms are written once with the waypoint's variables `t` (its position [m, world]), `R` "
+             "(its rotation, when the trajectory has an `orientation`) and `k` (its index), e.g. `target = \"t\"`, "
+             "`rotation = \"R\"`; at least one term must use them. Motion terms then measure from the previous "
+             "waypoint's answer.", ""]
     out += ["## `[[terms]]`", "",
             "Every entry has a `type` (below), and may have a `weight` (default 1) and a `name` (its label in "
             "results). An unknown key is an error that lists the keys its type takes.", ""]

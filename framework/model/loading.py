@@ -21,7 +21,7 @@ import pinocchio as pin
 from ..errors import LimitsError, RobotFileError, UnknownFrameError, UnknownJointError, UnknownRobotError
 from ..resources import data_dir
 from .xacro_files import package_folders
-from .roles import mobile_base, segment_names
+from .roles import gripper_groups, mobile_base, segment_names
 from .floating import expand as expand_floating, floating_joints, with_floating_joints
 from .bounds import default_bounds, override_bounds
 from .joints import JointKind, build_joints
@@ -156,6 +156,10 @@ def parse_urdf(text: str, what: str = "URDF") -> ET.Element:
     if any(str(e.tag).startswith(XACRO_NAMESPACE) for e in root.iter()):
         raise RobotFileError(f"{what} holds xacro (xacro: elements): name the file .urdf.xacro (or .xacro) to have "
                              "it expanded")
+    substituted = next((v for e in root.iter() for v in e.attrib.values() if "$(" in v or "${" in v), None)
+    if substituted is not None:
+        raise RobotFileError(f"{what} holds xacro substitutions ({substituted[:40]!r}): name the file .urdf.xacro to "
+                             "have it expanded ($(env), $(optenv) and $(eval) also need trusted=True)")
     if root.find("link") is None:
         raise RobotFileError(f"{what} has no <link>")
     _check_tree(root, what)
@@ -481,6 +485,9 @@ def _with_groups(robot: Robot, groups: Mapping[str, Sequence[str]] | None, stric
         segments = {keys: members for keys, members in segments.items() if members}
         names = segment_names(robot, chains, list(segments))
         for (keys, members), name in zip(segments.items(), names):
+            result[name] = _coords(robot, members)
+        grouped = {j for members in segments.values() for j in members} | set(base)
+        for name, members in gripper_groups(robot, grouped).items():
             result[name] = _coords(robot, members)
     return replace(robot, groups=result)
 

@@ -20,6 +20,8 @@ from .joints import JointKind
 #: Words that make a chain a head or a leg (else it is an arm), matched on its joints' and end frame's names.
 HEAD = re.compile(r"head|neck|gaze|pan_tilt|ptu", re.IGNORECASE)
 LEG = re.compile(r"leg|foot|feet|toe|sole|ankle|knee|thigh|calf|shin|paw|hip", re.IGNORECASE)
+#: Words that make a joint on no end-effector's chain part of a gripper (its fingers, jaws).
+GRIPPER = re.compile(r"finger|gripper|jaw|claw|thumb|hand", re.IGNORECASE)
 #: Side tokens: a name part (between separators) that says left / right / front / rear.
 _SIDES = (
     (re.compile(r"(^|[^a-z])(fl|lf)([^a-z]|$)"), "front_left"), (re.compile(r"(^|[^a-z])(fr|rf)([^a-z]|$)"), "front_right"),
@@ -102,17 +104,31 @@ def segment_names(robot, chains: Sequence[Sequence[str]], segments: Sequence[fro
 
 
 def _side(words: Sequence[str]) -> str:
-    """The side the names say (the first word that says one), or ``""``."""
+    """The side the names say: in the first word that says one, its earliest side token; or ``""``."""
     for word in words:
         lowered = word.lower()
+        found = [(m.start(), side) for pattern, side in _SIDES for m in [pattern.search(lowered)] if m]
+        if not found:
+            continue
+        side = min(found)[1]
         front_rear = _FRONT_REAR.search(lowered)
-        for pattern, side in _SIDES:
-            if pattern.search(lowered):
-                if side in ("left", "right") and front_rear:
-                    return f"{'front' if front_rear.group(0) == 'front' else 'rear'}_{side}"
-                return side
+        if side in ("left", "right") and front_rear:
+            return f"{'front' if front_rear.group(0) == 'front' else 'rear'}_{side}"
+        return side
     return ""
 
 
 def _quadruped_side(words: Sequence[str]) -> bool:
     return any(pattern.search(w.lower()) for w in words for pattern, side in _SIDES[:4])
+
+
+def gripper_groups(robot, grouped: set[str]) -> dict[str, list[str]]:
+    """The solved joints of no group that move fingers or jaws (:data:`GRIPPER`), as ``"gripper"`` or, when the
+    names tell the sides apart, ``"left_gripper"`` / ``"right_gripper"``."""
+    found: dict[str, list[str]] = {}
+    for name in robot.joint_names:
+        if name not in grouped and GRIPPER.search(name):
+            found.setdefault(_side([name]), []).append(name)
+    if len(found) == 1:
+        return {"gripper": next(iter(found.values()))}
+    return {f"{side}_gripper" if side else "gripper": joints for side, joints in found.items()}

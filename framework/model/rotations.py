@@ -53,9 +53,9 @@ def rotation_from(target: Any, what: str, quaternion: str | None = None) -> np.n
         raise TaskError(f"{what} must be {ROTATION_FORMS}; got {target!r:.80}") from None
     if t.shape == (4,):
         if quaternion is None:
-            raise TaskError(f"{what} is 4 numbers: name their order with quaternion='xyzw' (scipy as_quat, ROS) or "
-                            f"quaternion='wxyz' (pinocchio.Quaternion(w, x, y, z), Eigen, MuJoCo), or give a "
-                            f"pinocchio.Quaternion, a scipy Rotation or a matrix")
+            raise TaskError(f"{what} is 4 numbers: name their order, quaternion \"xyzw\" (scipy's as_quat, ROS) or "
+                            f"\"wxyz\" (pinocchio.Quaternion(w, x, y, z), Eigen, MuJoCo); a matrix (and, in Python, a "
+                            f"pinocchio.Quaternion or a scipy Rotation) needs none")
         if not np.all(np.isfinite(t)):
             raise TaskError(f"{what} holds NaN or inf")
         norm = np.linalg.norm(t)

@@ -42,10 +42,9 @@ def expand_xacro(path: Path, *, xacro_args: Mapping[str, Any] | None = None,
     """URDF text of the xacro file ``path`` (see the module docstring for what an expression may do), expanded
     in a process of its own (:mod:`~framework.model.xacro_process`: xacro's globals are replaced there, not here)."""
     args = {k: str(v) for k, v in (xacro_args or {}).items()}
-    folders = package_folders(package_dirs)
     request = {"path": str(path), "args": args, "trusted": bool(trusted),
-               "package_dirs": {k: str(v) for k, v in folders.items()} if isinstance(folders, Mapping)
-               else [str(f) for f in folders]}
+               "package_dirs": [[e[0], str(e[1])] if isinstance(e, tuple) else str(e)
+                                for e in package_folders(package_dirs)]}
     done = subprocess.run([sys.executable, xacro_process.__file__], input=json.dumps(request), capture_output=True,
                           text=True, check=False)
     try:
@@ -62,21 +61,30 @@ def expand_xacro(path: Path, *, xacro_args: Mapping[str, Any] | None = None,
     return answer["urdf"]
 
 
-def package_folders(package_dirs: Any) -> tuple[Path, ...] | dict[str, Path]:
-    """``package_dirs`` checked and made absolute (relative paths against the working folder): a sequence of
-    folders, or a mapping ``{package name: its folder}``; anything else is a :class:`RobotFileError`."""
-    if isinstance(package_dirs, (str, Path)):
+def package_folders(package_dirs: Any) -> tuple[Path | tuple[str, Path], ...]:
+    """``package_dirs`` checked and made absolute (relative paths against the working folder): folders holding
+    packages, ``{package name: its folder}`` for packages named unlike their folders, or a list mixing both;
+    anything else is a :class:`RobotFileError`. Each entry is a folder or a ``(package name, folder)`` pair."""
+    if isinstance(package_dirs, (str, Path, Mapping)):
         package_dirs = [package_dirs]
-    if isinstance(package_dirs, Mapping):
-        if not all(isinstance(k, str) and isinstance(v, (str, Path)) for k, v in package_dirs.items()):
-            raise RobotFileError(f"package_dirs as a mapping is {{package name: folder}}; got {package_dirs!r}")
-        return {k: Path(v).resolve() for k, v in package_dirs.items()}
+    entries: list[Path | tuple[str, Path]] = []
     try:
-        folders = tuple(Path(p).resolve() for p in package_dirs)
+        for item in package_dirs:
+            if isinstance(item, Mapping):
+                if not all(isinstance(k, str) and isinstance(v, (str, Path)) for k, v in item.items()):
+                    raise TypeError
+                entries += [(k, Path(v).resolve()) for k, v in item.items()]
+            elif isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str) \
+                    and isinstance(item[1], Path):
+                entries.append((item[0], item[1].resolve()))  # an entry of this function's own result
+            elif isinstance(item, (str, Path)):
+                entries.append(Path(item).resolve())
+            else:
+                raise TypeError
     except TypeError:
-        raise RobotFileError(f"package_dirs must be folders or {{package name: folder}}; got {package_dirs!r}") \
-            from None
-    return folders
+        raise RobotFileError(f"package_dirs must be folders, {{package name: folder}}, or a list of both; got "
+                             f"{package_dirs!r}") from None
+    return tuple(entries)
 
 
 def find_package(name: str, package_dirs: Any) -> Path:

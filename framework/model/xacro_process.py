@@ -104,23 +104,28 @@ class _Namespace:
         self.__dict__.update(members)
 
 
-def find_package(name: str, package_dirs: Sequence[str | Path] | Mapping[str, str | Path]) -> Path:
-    """The folder of ROS package ``name``: given by name in ``package_dirs`` (a mapping ``{package: folder}``), or
-    found in its folders (each a package itself, or holding packages, to any depth), then in the folders of
-    ``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH/share``. Not found: an error listing the folders searched and the
+def find_package(name: str, package_dirs: Sequence | Mapping[str, str | Path]) -> Path:
+    """The folder of ROS package ``name``: given by name in ``package_dirs`` (``{package: folder}`` mappings or
+    ``[package, folder]`` pairs), or found in its folders (each a package itself, or holding packages, to any
+    depth), then in the folders of ``ROS_PACKAGE_PATH`` and ``AMENT_PREFIX_PATH/share``. Not found: an error listing the folders searched and the
     package names seen closest to ``name``."""
-    if isinstance(package_dirs, Mapping):
-        if name in package_dirs:
-            folder = Path(package_dirs[name])
-            if folder.is_dir():
-                return folder
-            raise RobotFileError(f"ROS package {name!r}: its folder {folder} (package_dirs) does not exist")
-        roots = [Path(p).parent for p in package_dirs.values()]
-    else:
-        roots = [Path(p) for p in package_dirs]
+    named: dict[str, Path] = {}
+    roots: list[Path] = []
+    for item in ([package_dirs] if isinstance(package_dirs, Mapping) else package_dirs):
+        if isinstance(item, Mapping):
+            named.update({k: Path(v) for k, v in item.items()})
+        elif isinstance(item, (list, tuple)):  # a (package name, folder) pair
+            named[str(item[0])] = Path(item[1])
+        else:
+            roots.append(Path(item))
+    if name in named:
+        if named[name].is_dir():
+            return named[name]
+        raise RobotFileError(f"ROS package {name!r}: its folder {named[name]} (package_dirs) does not exist")
+    roots += [p.parent for p in named.values()]
     roots += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
     roots += [Path(p) / "share" for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
-    seen: set[str] = set(package_dirs) if isinstance(package_dirs, Mapping) else set()
+    seen: set[str] = set(named)
     for root in roots:
         if not root.is_dir():
             continue

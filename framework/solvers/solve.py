@@ -106,7 +106,7 @@ class IKResult:
     @classmethod
     def _of_solve(cls, configuration: np.ndarray, cost: float, success: bool, stop_reason: str, iterations: int,
                   evaluations: int, wall_time: float, solver: str, settings: dict[str, Any], state: dict[str, Any],
-                  collisions: CollisionReport | None, source: tuple, why: tuple | str = "") -> IKResult:
+                  collisions: CollisionReport | None, source: tuple, why: str = "") -> IKResult:
         """A result whose tables are made on first read from ``source``: ``(program, term values (list, term
         order), task block errors (list, block order), history or None)``."""
         made = object.__new__(cls)  # (the slots set here: __init__'s defaults cost a call per solve)
@@ -118,10 +118,8 @@ class IKResult:
 
     @property
     def reason(self) -> str:
-        """Why the solve failed, in one line (``""`` on success); made when first read."""
-        if isinstance(self._why, tuple):  # (program, task block errors, tolerance, angle tolerance)
-            self._why = failure_reason(*self._why[:2], self._why[2], self._why[3], self.collisions,
-                                       self.stop_reason, self.configuration)
+        """Why the solve failed, in one line (``""`` on success; made at the end of the solve, while its targets are
+        the ones it solved for)."""
         return self._why
 
     def _make(self) -> None:
@@ -141,7 +139,6 @@ class IKResult:
     def __getstate__(self) -> dict[str, Any]:
         if self._source is not None:
             self._make()
-        self.reason  # noqa: B018  (made: a pickle carries the line, not the program)
         return {name: getattr(self, name) for name in self.__slots__}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -318,4 +315,5 @@ def result_of(problem: Problem, outcome, solver: str, request: Request, start: f
     return IKResult._of_solve(x, cost, success, stop, int(iterations), int(evaluations),
                               time.perf_counter() - start, solver, settings, state, collisions,
                               (program, value_list, error_list, history),
-                              "" if success else (program, error_list, request.tolerance, request.angle_tolerance))
+                              "" if success else failure_reason(program, error_list, request.tolerance,
+                                                                request.angle_tolerance, collisions, stop, x))

@@ -154,9 +154,14 @@ def waypoint_errors(result: IKResult, kinds: Sequence[str]) -> tuple[float, floa
     """A waypoint's position, orientation and motion errors: the sums of its unweighted terms of each kind
     (``kinds``: :attr:`~framework.costs.program.Program.term_kinds` of its problem)."""
     totals = {"position": 0.0, "orientation": 0.0, "motion": 0.0}
-    for value, kind in zip(result.terms.values(), kinds):
+    errors = None
+    for (name, value), kind in zip(result.terms.items(), kinds):
         if kind in totals:
             totals[kind] += value
+        elif kind == "other":  # a term of both (a pose): its distance [m] and its angle as sin(φ/2)
+            errors = result.errors if errors is None else errors
+            totals["position"] += errors.get(f"{name}.distance", 0.0)
+            totals["orientation"] += float(np.sin(0.5 * errors.get(f"{name}.angle", 0.0)))
     return totals["position"], totals["orientation"], totals["motion"]
 
 
