@@ -48,8 +48,8 @@ from two_hands import HANDS as PR2_HANDS  # noqa: E402
 from two_hands import pr2 as load_pr2  # noqa: E402
 
 import framework as fw  # noqa: E402
-from framework.costs.blocks import ROWS  # noqa: E402
 from framework.costs.kernels import TASK, residuals_at  # noqa: E402
+from framework.engine.local import residual_arrays  # noqa: E402
 from framework.io.taskfile import load_task  # noqa: E402
 from tests.conftest import example_robot_data_dir  # noqa: E402
 
@@ -301,14 +301,14 @@ def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -
         times = []
         for problem in (s["free"], s["coll"]):
             program = problem.program
-            rows = int(program.prog[0][:, ROWS].sum())
-            r, J = np.empty(rows), np.empty((rows, X.shape[1]))
-            residuals_at(X[0], TASK, program.kin, program.prog, r, J)
+            program.refresh()
+            r, J = residual_arrays(program)
+            residuals_at(X[0], TASK, program.packed, r, J)
             best = np.inf
             for _ in range(5):
                 t = time.perf_counter()
                 for x in X:
-                    residuals_at(x, TASK, program.kin, program.prog, r, J)
+                    residuals_at(x, TASK, program.packed, r, J)
                 best = min(best, (time.perf_counter() - t) / len(X))
             times.append(1e6 * best)
         lines.append(f"| {name} | {times[0]:.1f} | {times[1]:.1f} | {times[1] / times[0]:.1f} |")

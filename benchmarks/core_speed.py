@@ -47,11 +47,15 @@ Q_PREV = [0, 0, np.pi / 2, -np.pi / 2, np.pi / 2, -np.pi / 4, np.pi / 4, 0, np.p
 def measure() -> dict:
     """Every measurement with whichever ``framework`` is importable (this checkout or the baseline)."""
     import framework
-    from framework.model.kinematics import PopulationKinematics  # noqa: F401  (both versions have it)
-    from framework.solvers.solve import solve
-    from framework.io.taskfile import load_task
+    from framework import solve
     from framework.tracking import TrackingTask, track
-    from framework.tracking.paths import paper000
+
+    try:  # the folders by layer
+        from framework.io.taskfile import load_task
+        from framework.tracking.paths import paper000
+    except ImportError:  # a baseline from before them
+        from framework.taskfile import load_task
+        from framework.trajectory import paper000
 
     root = Path(framework.__file__).resolve().parents[1]
     task = load_task(root / "tasks" / "youbot_dual_coordinated_ik.toml")
@@ -82,14 +86,19 @@ def measure() -> dict:
     robot = p.robot
     weights = {"frame": "arm1_ee", "follower": "arm2_ee", "offset": (0.2, -0.3, -0.2), "position_weight": 1.2,
                "motion": {"base": 0.1, "arm1": 0.4, "arm2": 0.4}}
+    import inspect
+
+    # the same budget and tolerance in either checkout (their defaults and the budget's name changed)
+    budget = {("max_iterations" if "max_iterations" in inspect.signature(track).parameters
+               else "iterations_per_point"): 300, "tolerance": 1e-4}
     extra: dict = {}  # the task first (the default now; the baseline's hybrid reached every point as well)
     for name in PATHS:
         path = paper000(name)
         track(robot, path[:3], TrackingTask(**weights), solver="hybrid", initial=np.array(Q_PREV), progress=False,
-              tolerance=1e-4, max_iterations=300, **extra)
+              **budget, **extra)
         t = time.perf_counter()
         result = track(robot, path, TrackingTask(**weights), solver="hybrid", initial=np.array(Q_PREV),
-                       progress=False, tolerance=1e-4, max_iterations=300, **extra)
+                       progress=False, **budget, **extra)
         out["paths"][name] = {"seconds": time.perf_counter() - t, "points": len(result),
                               "max_error": float(result.position_error.max())}
     rng = np.random.default_rng(0)
