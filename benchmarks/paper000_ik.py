@@ -6,8 +6,8 @@ e_t1 + e_t2 side by side with the paper's, success rate (< 1e-4 m), median wall 
 solve, the ordering of the algorithms against the paper's, the check of the hybrid, and the figures
 (``docs/results/figures/bench/paper000_tables4-7_*.png``). Hand-written notes at the end of the document are kept.
 
-    nohup /work/venv/bin/python benchmarks/paper000_ik.py -j 2 > /tmp/paper000_ik.log 2>&1 &
-    /work/venv/bin/python benchmarks/paper000_ik.py --report-only
+    nohup python benchmarks/paper000_ik.py -j 2 > /tmp/paper000_ik.log 2>&1 &
+    python benchmarks/paper000_ik.py --report-only
 
 Setup (paper 000 section 4.1): f = 1.2 (e_t1 + e_t2) + 0.1 e_q0 + 0.4 (e_q1 + e_q2), the paper's q_prev, population
 30, 1000 iterations, infeasible members re-sampled in the box, algorithm parameters of its Table 3 (the registry
