@@ -45,7 +45,8 @@ def run_command(args, console: Console) -> int:
     console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF) with {solver}: {task.description}")
 
     names = cases[0].problem.names
-    table = Table(title=f"{task.name}: {solver}, seed {asked(settings)['seed']} (unweighted terms)")
+    solve_settings = asked(settings)
+    table = Table(title=f"{task.name}: {solver}, seed {solve_settings['seed']} (unweighted terms)")
     table.add_column("")
     rows: dict[str, list[str]] = {n: [] for n in (*names, "cost", "task error", "success", "iterations",
                                                    "evaluations", "time (s)")}
@@ -56,7 +57,7 @@ def run_command(args, console: Console) -> int:
         for case in cases:
             status.update(f"solving {case.name}")
             try:
-                result = solve(case.problem, solver, **asked(settings),
+                result = solve(case.problem, solver, **solve_settings,
                                callback=recorder.term_logger(case.problem, case.name) if recorder else None)
             except KeyboardInterrupt:  # a second Ctrl-C, or one while the solver's code compiled: no result
                 interrupted = True
@@ -167,16 +168,17 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     cases = [c for c in task.cases if not args.case or c.name in args.case]
     if not cases:
         raise TaskError(f"no case named {args.case}; cases: {[c.name for c in task.cases]}")
-    tolerance = asked(settings)["tolerance"]
+    solve_settings = asked(settings)
     results: list = []
     try:
         with _recorder(args, task, settings) as recorder, _waypoint_csv(args.output, task.robot) as csv_row:
             console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF), tracking with {solver} "
-                          f"({asked(settings)['max_iterations'] or 'default'} iterations per point): {task.description}")
-            interrupted = _track_cases(args, task, cases, settings, solver, tolerance, recorder, results, csv_row)
+                          f"({solve_settings['max_iterations'] or 'default'} iterations per point): {task.description}")
+            interrupted = _track_cases(args, task, cases, settings, solver, solve_settings, recorder, results,
+                                       csv_row)
     except KeyboardInterrupt:  # before the tracking loop took over Ctrl-C (files opening, the problem's code
         interrupted = True  # compiling): what was done is in the table, the CSV and the recording
-    console.print(tracking_table(task, results, solver, asked(settings)["seed"], tolerance))
+    console.print(tracking_table(task, results, solver, solve_settings["seed"], solve_settings["tolerance"]))
     for case, result in results:  # why a path missed waypoints, in one line
         if result.reason:
             console.print(f"[red]missed[/] {escape(case.name)}: {escape(result.reason)}")
@@ -192,8 +194,8 @@ def _run_tracking(args, console: Console, task, settings: dict, solver: str) -> 
     return EXIT_OK if all(r.all_success for _, r in results) else EXIT_MISSED
 
 
-def _track_cases(args, task, cases, settings, solver, tolerance, recorder, results: list, csv_row) -> bool:
-    """Track each case in turn, appending ``(case, result)`` to ``results`` (and to the recording, if any) and
+def _track_cases(args, task, cases, settings, solver, solve_settings, recorder, results: list, csv_row) -> bool:
+    """Track each case in turn (``solve_settings``: :func:`asked`), appending ``(case, result)`` to ``results`` (and to the recording, if any) and
     each waypoint to the CSV as soon as it is solved; returns True when Ctrl-C stopped the run."""
     from ..tracking import track, waypoint_errors
 
@@ -211,7 +213,7 @@ def _track_cases(args, task, cases, settings, solver, tolerance, recorder, resul
         result = track(
             task.robot, case.trajectory, case.builder,
             solver=solver,
-            **asked(settings),
+            **solve_settings,
             initial=case.initial,
             warm_start=settings.get("warm_start", True),
             predict=settings.get("predict"),
@@ -271,18 +273,13 @@ def asked(settings: dict) -> dict:
             "options": settings.get("options", DEFAULTS.options)}
 
 
+@contextmanager
 def _waypoint_csv(path: Path | None, robot):
     """A writer of one CSV row per solved waypoint (case, k, joint coordinates, position / orientation / motion
     error), flushed at once so a killed run keeps every finished waypoint; a no-op without ``path``."""
     header = ["case", "k", *robot.coordinate_names, "position_error", "orientation_error", "motion_error"]
-    rows = _csv_rows(path, header)
-
-    @contextmanager
-    def waypoints():
-        with rows as row:
-            yield lambda case, k, q, errors: row(case, k, *(f"{v:.17g}" for v in q), *(f"{e:.6e}" for e in errors))
-
-    return waypoints()
+    with _csv_rows(path, header) as row:
+        yield lambda case, k, q, errors: row(case, k, *(f"{v:.17g}" for v in q), *(f"{e:.6e}" for e in errors))
 
 
 @contextmanager
