@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import TaskError
+from ..model.bounds import bound_pair
 from ..model.rotations import rotation_from
 from ..tracking.trajectory import Trajectory
 from ..tracking.paths import circle, lemniscate, line, paper000, point_count, rose, sinusoid
@@ -216,14 +217,7 @@ def _robot_options(task: Mapping[str, Any], path: Path) -> dict[str, Any]:
                                    else path.parent / str(item) for item in ([given] if isinstance(given, dict)
                                                                               else given)]
     if "bounds" in task:
-        options["bounds"] = {k: _bound_pair(evaluate(v, {}, f"[task] bounds.{k}"), f"[task] bounds.{k}")
+        where = "[task] bounds.{}".format
+        options["bounds"] = {k: bound_pair(evaluate(v, {}, where(k)), where(k), TaskError)
                              for k, v in task["bounds"].items()}
     return options
-
-
-def _bound_pair(value: Any, where: str) -> tuple[float, float]:
-    """``(lower, upper)`` of a ``[task] bounds`` entry, or a :class:`TaskError` naming ``where``."""
-    pair = np.asarray(value, dtype=float) if isinstance(value, (list, tuple, np.ndarray)) else None
-    if pair is None or pair.shape != (2,) or not np.all(np.isfinite(pair)):
-        raise TaskError(f"{where} must be a pair [lower, upper] of finite numbers [rad or m]; got {value!r}")
-    return float(pair[0]), float(pair[1])

@@ -57,7 +57,7 @@ def override_bounds(lower: np.ndarray, upper: np.ndarray, bounds: Mapping[str, t
     if not isinstance(bounds, Mapping):
         raise LimitsError(f"bounds must be a table of joint or coordinate name -> (lower, upper); got {bounds!r}")
     for name, pair in bounds.items():
-        lo, hi = _pair(name, pair)
+        lo, hi = bound_pair(pair, f"bounds[{name!r}]")
         if name in coordinates:
             idx = [coordinates.index(name)]
         else:
@@ -96,13 +96,13 @@ def default_bounds(
     return np.array(lower, dtype=float), np.array(upper, dtype=float)
 
 
-def _pair(name: str, pair) -> tuple[float, float]:
-    """``(lower, upper)`` of ``bounds[name]`` as two finite floats, or a :class:`LimitsError` that names it."""
+def bound_pair(value, what: str, error: type[Exception] = LimitsError) -> tuple[float, float]:
+    """``(lower, upper)`` of one coordinate's bounds as two finite floats, or ``error`` naming ``what`` (the Python
+    argument, or the task file's key)."""
     try:
-        values = np.asarray(pair, dtype=float)
+        values = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         values = None
     if values is None or values.shape != (2,) or not np.all(np.isfinite(values)):
-        raise LimitsError(f"bounds[{name!r}] must be a pair (lower, upper) of finite numbers [rad or m]; "
-                          f"got {pair!r}")
+        raise error(f"{what} must be a pair [lower, upper] of finite numbers [rad or m]; got {value!r}")
     return float(values[0]), float(values[1])
