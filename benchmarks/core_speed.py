@@ -86,11 +86,7 @@ def measure() -> dict:
     robot = p.robot
     weights = {"frame": "arm1_ee", "follower": "arm2_ee", "offset": (0.2, -0.3, -0.2), "position_weight": 1.2,
                "motion": {"base": 0.1, "arm1": 0.4, "arm2": 0.4}}
-    import inspect
-
-    # the same budget and tolerance in either checkout (their defaults and the budget's name changed)
-    budget = {("max_iterations" if "max_iterations" in inspect.signature(track).parameters
-               else "iterations_per_point"): 300, "tolerance": 1e-4}
+    budget = report.track_budget(track, 300, 1e-4)  # the same in either checkout
     extra: dict = {}  # the task first (the default now; the baseline's hybrid reached every point as well)
     for name in PATHS:
         path = paper000(name)

@@ -16,6 +16,16 @@ NOTES_START, NOTES_END = "<!-- notes -->", "<!-- /notes -->"
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def track_budget(track, iterations: int, tolerance: float) -> dict:
+    """``track``'s keywords for ``iterations`` per waypoint and ``tolerance`` in whichever checkout it comes from
+    (this one names the budget ``max_iterations``; baselines from before the one set of settings,
+    ``iterations_per_point``): a comparison runs the same budget and tolerance on both sides."""
+    import inspect
+
+    name = "max_iterations" if "max_iterations" in inspect.signature(track).parameters else "iterations_per_point"
+    return {name: iterations, "tolerance": tolerance}
+
+
 def cpu_model() -> str:
     """The CPU's model name (Linux), else the platform's machine type."""
     try:

@@ -336,8 +336,6 @@ def worker(root: str, inputs: str) -> None:
     import numpy as np
     import pinocchio as pin
 
-    import inspect
-
     import framework as fw
     from framework.tracking import TrackingTask, track
     from tests.conftest import example_robot_data_dir
@@ -346,9 +344,7 @@ def worker(root: str, inputs: str) -> None:
         from framework.tracking import paths
     except ImportError:  # a baseline from before the folders by layer
         from framework import trajectory as paths
-    # the same budget and tolerance in either checkout (their defaults and the budget's name changed)
-    budget = {("max_iterations" if "max_iterations" in inspect.signature(track).parameters
-               else "iterations_per_point"): 300, "tolerance": 1e-4}
+    budget = report.track_budget(track, 300, 1e-4)  # the same in either checkout
 
     data = np.load(inputs)
     erd = example_robot_data_dir()
