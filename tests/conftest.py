@@ -59,3 +59,22 @@ def sphere_arm():
     robot = fw.robot_from_urdf(SPHERES)
     exact = SphereCover(np.array([0, 2]), np.array([[L, 0, 0], [L, 0, 0]]), np.array([R, R]), ("base_0", "fore_0"))
     return robot, fw.RobotShape(robot), exact
+
+
+def pinocchio_placements(robot, x: np.ndarray, frames) -> dict:
+    """frame -> placement (``pin.SE3``) at ``x`` by Pinocchio's own model of the robot's whole URDF text: solved
+    joints from ``x``, locked ones at their values, mimic joints from their leaders, each set by name (an
+    independent check of the package's reduced model and kinematics)."""
+    import pinocchio as pin
+
+    full = pin.buildModelFromXML(robot.urdf)
+    data = full.createData()
+    values = dict(robot.locked)
+    values.update({j.name: x[j.index] for j in robot.joints})
+    values.update({m.name: m.multiplier * values[m.leader] + m.offset for m in robot.mimics})
+    q = pin.neutral(full)
+    for joint, value in values.items():
+        jm = full.joints[full.getJointId(joint)]
+        q[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(value), np.sin(value)] if jm.nq == 2 else [value]
+    pin.framesForwardKinematics(full, data, q)
+    return {frame: data.oMf[full.getFrameId(frame)].copy() for frame in frames}

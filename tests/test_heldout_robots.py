@@ -15,6 +15,7 @@ import pytest
 import framework as fw
 from framework.io.recording import Recorder, read_recording
 from framework.viz.drawing import RobotDrawing
+from tests.conftest import pinocchio_placements
 
 pybullet_data = pytest.importorskip("pybullet_data", reason="the test extra installs pybullet (its robot data)")
 rtbdata = pytest.importorskip("rtbdata", reason="the test extra installs rtb-data (robotics-toolbox's robot data)")
@@ -37,25 +38,6 @@ ROBOTS = {
 }
 
 
-def _pinocchio_placement(robot: fw.Robot, x: np.ndarray, frame: str) -> pin.SE3:
-    """``frame``'s placement by Pinocchio's model of the robot's whole URDF text, every joint set by name."""
-    full = pin.buildModelFromXML(robot.urdf)
-    data = full.createData()
-    q = pin.neutral(full)
-    values = {**robot.locked, **{j.name: x[j.index] for j in robot.joints}}
-    for name, value in values.items():
-        joint = full.joints[full.getJointId(name)]
-        if joint.nq == 2:  # continuous: (cos, sin)
-            q[joint.idx_q:joint.idx_q + 2] = np.cos(value), np.sin(value)
-        else:
-            q[joint.idx_q] = value
-    for mimic in robot.mimics:
-        joint = full.joints[full.getJointId(mimic.name)]
-        q[joint.idx_q] = mimic.multiplier * x[mimic.index] + mimic.offset
-    pin.framesForwardKinematics(full, data, q)
-    return data.oMf[full.getFrameId(frame)]
-
-
 @pytest.mark.parametrize("name", list(ROBOTS))
 def test_a_robot_file_from_elsewhere_loads_solves_and_records(name, tmp_path):
     path, options, frame, groups = ROBOTS[name]
@@ -69,7 +51,7 @@ def test_a_robot_file_from_elsewhere_loads_solves_and_records(name, tmp_path):
     problem = fw.Problem(robot, fw.Pose(frame, target))
     result = fw.solve(problem, seed=0)
     assert result.success, result.reason
-    reached = _pinocchio_placement(robot, result.configuration, frame)
+    reached = pinocchio_placements(robot, result.configuration, [frame])[frame]
     assert np.linalg.norm(reached.translation - target.translation) <= 1e-6
     assert np.linalg.norm(pin.log3(reached.rotation.T @ target.rotation)) <= 1e-6
     with warnings.catch_warnings():

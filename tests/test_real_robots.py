@@ -9,6 +9,7 @@ import pinocchio as pin
 import pytest
 
 import framework as fw
+from tests.conftest import pinocchio_placements
 
 ARM7 = [f"arm_{{side}}_{k}_joint" for k in range(1, 8)]
 ROBOTS = {
@@ -41,18 +42,9 @@ def test_two_hands_at_full_poses_with_motion_second(erd, name):
     assert result.success, result.errors
     # Pinocchio's own model of the whole URDF: solved joints from the answer, locked ones at their values,
     # mimic joints from their leaders
-    full = pin.buildModelFromXML(robot.urdf)
-    data = full.createData()
-    values = dict(robot.locked)
-    values.update({j.name: result.configuration[j.index] for j in robot.joints})
-    values.update({m.name: m.multiplier * values[m.leader] + m.offset for m in robot.mimics})
-    q = pin.neutral(full)
-    for joint, value in values.items():
-        jm = full.joints[full.getJointId(joint)]
-        q[jm.idx_q:jm.idx_q + jm.nq] = [np.cos(value), np.sin(value)] if jm.nq == 2 else [value]
-    pin.framesForwardKinematics(full, data, q)
+    reached = pinocchio_placements(robot, result.configuration, targets)
     for hand, M in targets.items():
-        error = pin.log6(M.inverse() * data.oMf[full.getFrameId(hand)])
+        error = pin.log6(M.inverse() * reached[hand])
         assert np.linalg.norm(error.linear) <= 1e-9 and np.linalg.norm(error.angular) <= 1e-9, (hand, error)
     # motion second: no more motion than the configuration the targets came from, which reaches them too
     goal_motion = fw.Problem(robot, fw.Motion("all", start)).values(x_goal[None])[0, 0]
