@@ -30,7 +30,7 @@ import pinocchio as pin
 
 from .broad_phase import BoundingSpheres, bounding_spheres
 from ..errors import RobotFileError, TaskError
-from ..model.robot import Robot
+from ..model.robot import Robot, derived
 from .scene import Scene
 from .solids import solid_row
 from .spheres import SphereCover, sphere_cover
@@ -253,11 +253,7 @@ class RobotShape:
     def derived(self, make, *args, key=None):
         """``make(self, *args)``, built once per shape, ``make`` and ``args`` (or ``key`` in their place): what a
         collision term derives from the shape (its hull pairs, its blocks); the function is part of the key."""
-        index = (make, args if key is None else key)
-        value = self._memo.get(index)
-        if value is None:
-            value = self._memo[index] = make(self, *args)
-        return value
+        return derived(self._memo, self, make, args, key)
 
     def hull(self, index: int):
         """The convex coal geometry of geometry object ``index``: a mesh's convex hull (built once, qhull), a

@@ -311,11 +311,7 @@ class Robot:
         arguments are not what identifies the result): tables derived from the model — compiled kinematics, packed
         problem layouts, FABRIK chains — that are not part of the robot's value. The function itself is part of
         the key, so no two callers share an entry by name."""
-        index = (make, args if key is None else key)
-        value = self._cache.get(index)
-        if value is None:
-            value = self._cache[index] = make(self, *args)
-        return value
+        return derived(self._cache, self, make, args, key)
 
     def frame_placement(self, x: np.ndarray, frame: str) -> pin.SE3:
         """World placement of one frame at one configuration, computed by Pinocchio (reference path)."""
@@ -342,3 +338,13 @@ def _to_q(X, indices, factors, Q) -> None:
             else:
                 Q[p, indices[e, 1]] = np.cos(value)
                 Q[p, indices[e, 1] + 1] = np.sin(value)
+
+
+def derived(table: dict, owner: Any, make: Callable[..., T], args: tuple, key: Hashable = None) -> T:
+    """``make(owner, *args)`` kept in ``table`` (``owner``'s own) under ``(make, args)``, or ``(make, key)`` when
+    the arguments are not what identifies the result; made on the first request (:meth:`Robot.derived`)."""
+    index = (make, args if key is None else key)
+    value = table.get(index)
+    if value is None:
+        value = table[index] = make(owner, *args)
+    return value
