@@ -111,7 +111,9 @@ class Orientation(Term):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"orientation[{frame}]"
-        self.quaternion = check_order(quaternion, f"orientation target of {frame!r}")
+        # (the common case names no order: no message is made for it)
+        self.quaternion = quaternion if quaternion is None else check_order(quaternion,
+                                                                            f"orientation target of {frame!r}")
         self.set_target(target)
 
     def set_target(self, target: Any) -> None:

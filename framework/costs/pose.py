@@ -93,7 +93,9 @@ class Pose(Term):
         self.frame = frame
         self.frames = (frame,)
         self.name = name or f"pose[{frame}]"
-        self.quaternion = check_order(quaternion, f"pose target of {frame!r}")
+        # (the common case names no order: no message is made for it)
+        self.quaternion = quaternion if quaternion is None else check_order(quaternion,
+                                                                            f"pose target of {frame!r}")
         self.set_target(target)
 
     def set_target(self, target) -> None:
