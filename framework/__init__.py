@@ -29,7 +29,7 @@ from .model.robot import Robot
 from .solvers.solve import IKResult, solve
 from .solvers.batch import BatchResult, solve_batch
 from .geometry.collision import CollisionReport, Contact, RobotShape
-from .geometry.scene import Box, Capsule, Mesh, Plane, Scene, Sphere
+from .geometry.scene import Box, Capsule, Mesh, Plane, Prism, Scene, Sphere
 from .solvers import solver_names
 
 __version__ = "0.1.0"
@@ -79,6 +79,7 @@ __all__ = [
     "Capsule",
     "Plane",
     "Mesh",
+    "Prism",
     "RobotFileError",
     "SolverError",
     "TaskError",

@@ -14,16 +14,22 @@ import framework as fw
 from framework.solvers.fabrik import (
     BaseOrientation,
     BaseReach,
-    Circle,
     Environment,
     MFabrik,
     MobileArm,
-    Polygon,
-    Rectangle,
     UnsupportedBaseError,
     UnsupportedChainError,
 )
+from framework.solvers.fabrik.environment import Circle, Polygon
 from framework.solvers.fabrik.regions import AnnulusInBox
+
+
+def Rectangle(centre, size, angle=0.0) -> Polygon:
+    """A rectangular floor shadow: centre (x, y) [m], size (along x, along y) [m], turned by ``angle`` [rad]."""
+    (cx, cy), (w, d) = centre, size
+    c, s = math.cos(angle), math.sin(angle)
+    corners = [(-w / 2, -d / 2), (w / 2, -d / 2), (w / 2, d / 2), (-w / 2, d / 2)]
+    return Polygon(tuple((cx + c * u - s * v, cy + s * u + c * v) for u, v in corners))
 
 
 @pytest.fixture(scope="module")

@@ -13,13 +13,22 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import framework as fw
-from framework.solvers.fabrik import Circle, Environment, MFabrik, MobileArm, Polygon, Rectangle
+from framework.solvers.fabrik import Environment, MFabrik, MobileArm
+from framework.solvers.fabrik.environment import Circle, Polygon
 from framework.solvers.fabrik.steps import intermediate_configurations, shortest_free_path
 from framework.solvers.fabrik.steps import algorithm2
-from framework.tracking import TrackingTask, track
+from framework.tracking import track
 from framework.tracking.trajectory import Trajectory
 
 BOX = ((-1.5, 1.5), (-1.5, 1.5))
+
+
+def Rectangle(centre, size, angle=0.0) -> Polygon:
+    """A rectangular floor shadow: centre (x, y) [m], size (along x, along y) [m], turned by ``angle`` [rad]."""
+    (cx, cy), (w, d) = centre, size
+    c, s = math.cos(angle), math.sin(angle)
+    corners = [(-w / 2, -d / 2), (w / 2, -d / 2), (w / 2, d / 2), (-w / 2, d / 2)]
+    return Polygon(tuple((cx + c * u - s * v, cy + s * u + c * v) for u, v in corners))
 
 
 @pytest.fixture(scope="module")
@@ -120,19 +129,28 @@ def test_steps_are_short_and_free(robot, arm, centres, sizes, ends, step):
 
 
 def test_tracking_a_path_past_an_obstacle(robot, arm):
-    """Paper 003 experiment 2: a sinusoid over a square obstacle, 20 cm margin, steps of 10 cm."""
+    """Paper 003 experiment 2: a sinusoid over a square obstacle (a box of the scene an Obstacles term reads), 20 cm
+    margin, steps of 10 cm: the solver's own steps (option ``step``) are Algorithm 2's along the path."""
     env = Environment([Rectangle((0.0, 0.0), (0.4, 0.4))], margin=0.2, bounds=BOX)
     solver = MFabrik(arm, env)
+    shape = fw.RobotShape(robot)
+    box = fw.Box([0.0, 0.0, 0.1], [0.4, 0.4, 0.2])
+
+    def task(k, position, rotation, previous):
+        return fw.Position("arm_ee", position) + fw.Obstacles(shape, [box])
+
     ys = np.linspace(-1.0, 1.0, 21)
     targets = np.column_stack([0.1 * np.sin(2 * np.pi * ys), ys, np.full_like(ys, 0.3)])
     x0 = configuration_at(robot, (-0.2, -1.3))
-    tracking = track(robot, Trajectory.from_array(targets), TrackingTask(frame="arm_ee", motion={}), solver="mfabrik",
-                     initial=x0, tolerance=1e-3, max_iterations=1000, options={"environment": env},
-                     progress=False)
-    assert tracking.success.all()
+    states = []
+    tracking = track(robot, Trajectory.from_array(targets), task, solver="mfabrik", initial=x0, tolerance=1e-3,
+                     max_iterations=1000, options={"step": 0.1}, progress=False,
+                     callback=lambda k, result: states.append(result.state))
     reached = robot.frame_poses(tracking.configurations, "arm_ee").positions[:, 0]  # Pinocchio FK
     assert np.linalg.norm(reached - targets, axis=1).max() <= 1e-3
-    for steps in algorithm2(solver, x0, tracking.configurations, targets, 0.1):
+    expected = algorithm2(solver, x0, tracking.configurations, targets, 0.1)
+    for steps, state in zip(expected, states, strict=True):
         assert steps.success
         assert_free_steps(env, steps.bases, 0.1)
+        np.testing.assert_allclose(state["steps"].bases, steps.bases, atol=1e-9)
     assert tracking.iterations.sum() < 21 * 10

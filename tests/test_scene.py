@@ -368,49 +368,46 @@ def test_tracking_paper000_circle_around_a_table():
     assert np.mean(safe.position_error <= 1e-6) >= 0.85 and safe.position_error.max() <= 2e-3
 
 
-def test_m_fabrik_plans_around_the_shadows_of_the_same_scene(tmp_path):
+def test_m_fabrik_plans_around_the_shadows_of_the_same_scene():
     """Environment.from_scene: every obstacle's floor shadow contains its exact projection (dense surface
-    samples), a floor plane casts none, a wall is an error; a reach task's [[obstacles]] become M-FABRIK's
-    obstacles and its base stays out of them."""
+    samples; a ball's and an upright capsule's shadow is their disc, exactly; a prism's its polygon), a floor plane
+    casts none, a wall is an error; an Obstacles term's scene is M-FABRIK's and its base stays out of the shadows."""
     import shapely.geometry as sg
 
     from framework.solvers.fabrik import Environment
     from framework.geometry.spheres import surface_points
 
+    prism = fw.Prism([[1.0, -1.0], [1.4, -1.0], [1.2, -0.6]], height=0.5, bottom=0.1)
     scene = fw.Scene((fw.Box([0.8, 0.2, 0.3], [0.3, 0.4, 0.6], TURNED), fw.Sphere([-0.5, 0.5, 0.2], 0.2),
-                      fw.Capsule([0.0, -0.8, 0.3], 0.1, 0.6, TURNED), fw.Plane([0, 0, 0], [0, 0, 1])))
+                      fw.Capsule([0.0, -0.8, 0.3], 0.1, 0.6, TURNED), prism,
+                      fw.Capsule([-0.8, -0.8, 0.5], 0.15, 1.0), fw.Plane([0, 0, 0], [0, 0, 1])))
     environment = Environment.from_scene(scene, margin=0.1)
-    assert len(environment.obstacles) == 3
-    for obstacle, polygon in zip(scene.obstacles[:3], environment.obstacles):
-        shape, placement = obstacle.coal()
-        points = surface_points(shape, 4000, np.random.default_rng(0)) @ placement.rotation.T + placement.translation
-        hull = sg.Polygon(polygon.vertices).buffer(1e-9)
-        assert all(hull.contains(sg.Point(p[0], p[1])) for p in points)
+    assert len(environment.obstacles) == 5
+    for obstacle, shadow in zip(scene.obstacles[:5], environment.obstacles):
+        if obstacle is prism:  # its corners (its surface's convex hull)
+            points = prism.vertices()
+        else:
+            shape, placement = obstacle.coal()
+            points = surface_points(shape, 4000, np.random.default_rng(0)) @ placement.rotation.T + placement.translation
+        assert max(shadow.distance(p[0], p[1]) for p in points) <= 1e-9
+    np.testing.assert_allclose(environment.obstacles[3].vertices, prism.points)  # a prism's shadow is its polygon
+    assert environment.obstacles[4].radius == 0.15  # an upright capsule's: its disc
     with pytest.raises(TaskError, match="wall"):
         Environment.from_scene(fw.Scene((fw.Plane([0, 0, 0], [1, 0, 0]),)))
-    task_file = tmp_path / "reach.toml"
-    task_file.write_text("""
-[task]
-robot = "youbot_mobile"
-[reach]
-random = 20
-[reach.environment]
-margin = 0.2
-[[obstacles]]
-type = "box"
-center = [0.6, 0.0, 0.3]
-size = [0.3, 0.3, 0.6]
-""")
-    from framework.io.fabrik_tasks import run_reach_task
-
-    task = load_task(task_file)
-    assert len(task.environment.obstacles) == 1
-    run = run_reach_task(task)
-    box = sg.Polygon(task.environment.obstacles[0].vertices)
-    assert sum(r.success for r in run.results) >= 15
-    for result in run.results:
+    robot = fw.load_robot("youbot_mobile")
+    shape = fw.RobotShape(robot)
+    box = fw.Box([0.6, 0.0, 0.3], [0.3, 0.3, 0.6])
+    footprint = sg.box(0.45, -0.15, 0.75, 0.15)
+    rng = np.random.default_rng(0)
+    targets = robot.frame_poses(robot.random_configurations(rng, 20), "arm_ee").positions[:, 0]
+    reached = 0
+    for target in targets:
+        problem = fw.Problem(robot, fw.Position("arm_ee", target) + fw.Obstacles(shape, [box]))
+        result = fw.solve(problem, "mfabrik", initial=robot.random_configurations(rng, 1)[0], seed=0)
         x, y = result.configuration[:2]
-        assert box.distance(sg.Point(x, y)) >= 0.2 - 1e-6 or not result.success
+        assert footprint.distance(sg.Point(x, y)) >= 0.2 - 1e-6 or result.settings["reason"].startswith("unreachable")
+        reached += result.errors["position[arm_ee]"] <= 1e-6
+    assert reached >= 15
 
 
 def test_frames_added_by_a_collision_term_after_a_drawing_was_made():

@@ -15,7 +15,6 @@ from rich.table import Table
 
 from ..errors import EXIT_INTERRUPTED, EXIT_MISSED, EXIT_OK, TaskError
 from ..interrupts import graceful_interrupt
-from ..io.fabrik_tasks import ReachTask
 from ..io.placement import PlacementTask
 from .reach import run_placement
 from ..io.recording import Recorder
@@ -28,13 +27,15 @@ def run_command(args, console: Console) -> int:
     from ..io.taskfile import load_task
 
     task = load_task(resolve_task(args.task), points=getattr(args, "points", None))
-    if isinstance(task, ReachTask):  # M-FABRIK or its Jacobian baselines
-        return _run_reach(args, console, task)
     if isinstance(task, PlacementTask):  # where a mobile base should stand
         return run_placement(args, console, task)
     settings = dict(task.solver)
     overrides = {"name": args.solver, "seed": args.seed, "max_iterations": args.iterations,
                  "population": args.population}
+    if args.solver is not None and args.solver != settings.get("name", DEFAULTS.solver) and "options" in settings:
+        console.print(f"the file's [solver.options] are {settings.get('name', DEFAULTS.solver)}'s: "
+                      f"{args.solver} runs with its own defaults")
+        del settings["options"]
     settings.update({k: v for k, v in overrides.items() if v is not None})
     solver = settings.get("name", DEFAULTS.solver)
     if task.is_tracking:
@@ -100,55 +101,6 @@ def run_command(args, console: Console) -> int:
                                    "cases shown", highlight=False)
         return EXIT_INTERRUPTED
     return EXIT_OK if all_ok else EXIT_MISSED
-
-
-def _run_reach(args, console: Console, task) -> int:
-    """``metaik run`` of a reach task (paper 003): random targets or a path, with obstacles and Algorithm 2."""
-    from rich.progress import Progress
-
-    from ..io.fabrik_tasks import run_reach_task
-
-    solver = args.solver or task.solver["name"]
-    what = f"{len(task.targets)} set-points of a path" if task.is_path else f"{task.random} random targets"
-    console.print(f"[bold]{task.name}[/] on {task.robot.name} ({task.robot.n} DOF) with {solver}, {what}, "
-                  f"tolerance {task.solver['tolerance'] * 1e3:g} mm: {task.description}")
-    with Progress(console=console, transient=True, disable=args.no_progress) as bar:
-        job = bar.add_task("solving", total=task.random or None)
-        run = run_reach_task(task, solver=solver, progress=lambda k, total: bar.update(job, completed=k))
-    errors = run.position_errors
-    iterations, times = run.iterations, run.wall_times * 1e3
-    table = Table(title=f"{task.name}: {solver}")
-    table.add_column("")
-    table.add_column("value", justify="right")
-    rows = [
-        ("targets reached", f"{sum(r.success for r in run.results)}/{len(run.results)}"),
-        ("position error, mean / max [m]", f"{errors.mean():.2e} / {errors.max():.2e}"),
-        ("iterations, mean / max / total", f"{iterations.mean():.2f} / {iterations.max()} / {iterations.sum()}"),
-        ("time per solve, mean / max [ms]", f"{times.mean():.3f} / {times.max():.3f}"),
-        ("unreachable", str(sum(r.stop_reason == "unreachable" for r in run.results))),
-    ]
-    if task.environment is not None:
-        bases = run.base_positions
-        clearance = min(task.environment.clearance(*p) for p in bases)
-        inside = sum(task.environment.in_rejection(*p) for p in bases)
-        rows += [("base positions in the rejection area", f"{inside} of {len(bases)}"),
-                 ("least base clearance to an obstacle [m]", f"{clearance:.3f} (margin {task.environment.margin:g})")]
-    if run.steps is not None:
-        steps = run.steps
-        gaps = [s.longest_step for s in steps]
-        rows += [("Algorithm 2: intermediate configurations", str(sum(len(s.configurations) for s in steps))),
-                 ("Algorithm 2: largest base step [m]", f"{max(gaps, default=0.0):.3f} (ρ = {task.step:g})")]
-    for label, value in rows:
-        table.add_row(escape(label), value)
-    console.print(table)
-    if args.record is not None:
-        with Recorder(args.record, task.robot, description=f"# {task.name}\n\n{task.description}") as recorder:
-            recorder.log_path(run.configurations, desired={task.frame: run.targets},
-                              errors={"position_error": errors, "iterations": iterations.astype(float)},
-                              name=task.name, settings={"solver": solver, **task.solver})
-        _recorded(args, console)
-    ok = run.success
-    return EXIT_OK if ok else EXIT_MISSED
 
 
 def _recorder(args, task, settings: dict):

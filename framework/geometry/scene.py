@@ -1,4 +1,5 @@
-"""Obstacles in the robot's world: spheres, boxes, capsules, half-spaces (a floor, a wall) and meshes.
+"""Obstacles in the robot's world: spheres, boxes, capsules, half-spaces (a floor, a wall), meshes and upright
+prisms over floor polygons.
 
 One description serves every consumer: the :class:`~framework.costs.Obstacles` term reads each solid's parameters
 for the compiled signed-distance kernel (``SOLIDS`` blocks, :func:`framework.geometry.solids.solid_distance`),
@@ -12,7 +13,7 @@ it as ``[[obstacles]]`` tables::
 
 Units are metres; a rotation is any form :mod:`framework.model.rotations` reads (4 numbers with
 ``quaternion="xyzw"`` or ``"wxyz"``; task files: ``rpy`` in radians, or ``rotation`` with ``quaternion``). A mesh is approximated by spheres covering its surface for the
-kernel (the fitting of :mod:`framework.geometry.spheres`) and used whole by the exact check.
+kernel (the fitting of :mod:`framework.geometry.spheres`) and used whole by the exact check; so is a prism.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import pinocchio as pin
 
 from ..errors import TaskError
 from ..model.rotations import rotation_from
+from .prism import Prism
 from .solids import BOX, CAPSULE, HALFSPACE, SPHERE, solid_row
 from .spheres import fit_spheres, mesh_surface_points
 from ..validate import check_table
@@ -119,6 +121,10 @@ class Sphere:
         """Its shadow on the floor (x, y): a convex polygon ``(k, 2)`` [m] containing it (M-FABRIK's obstacles)."""
         return _hull(_ring(self.center, self.radius))
 
+    def round_footprint(self) -> tuple[float, float, float] | None:
+        """Its shadow when a disc: ``(x, y, radius)`` [m] (exact, where :meth:`footprint` is a polygon)."""
+        return float(self.center[0]), float(self.center[1]), self.radius
+
     def coal(self) -> tuple[Any, pin.SE3]:
         """The exact geometry and its placement in the world."""
         import coal
@@ -160,6 +166,10 @@ class Box:
     def footprint(self) -> np.ndarray | None:
         corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * self.size / 2
         return _hull(corners @ self.rotation.T + self.center)
+
+    def round_footprint(self) -> tuple[float, float, float] | None:
+        """None: its shadow is no disc."""
+        return None
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
@@ -207,6 +217,12 @@ class Capsule:
     def footprint(self) -> np.ndarray | None:
         axis = self.rotation[:, 2] * self.length / 2
         return _hull(np.vstack([_ring(self.center - axis, self.radius), _ring(self.center + axis, self.radius)]))
+
+    def round_footprint(self) -> tuple[float, float, float] | None:
+        """An upright capsule's shadow, a disc ``(x, y, radius)`` [m]; None when tilted."""
+        if abs(self.rotation[2, 2]) < 1 - 1e-12:
+            return None
+        return float(self.center[0]), float(self.center[1]), self.radius
 
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
@@ -256,6 +272,10 @@ class Plane:
             return None
         raise TaskError(f"{self.name}: a tilted or vertical plane has no bounded footprint on the floor; "
                         "use a box for a wall")
+
+    def round_footprint(self) -> tuple[float, float, float] | None:
+        """None: its shadow is no disc."""
+        return None
 
     def coal(self) -> tuple[Any, pin.SE3]:
         """A wide, deep box whose top face is the plane (coal's half-spaces have no distance to meshes)."""
@@ -328,6 +348,10 @@ class Mesh:
         vertices = np.asarray(trimesh.load(str(self.path), force="mesh").vertices) * self.scale
         return _hull(vertices @ self.rotation.T + self.center)
 
+    def round_footprint(self) -> tuple[float, float, float] | None:
+        """None: its shadow is no disc."""
+        return None
+
     def coal(self) -> tuple[Any, pin.SE3]:
         import coal
 
@@ -339,8 +363,9 @@ class Mesh:
         return geometry, pin.SE3(self.rotation, self.center)
 
 
-Obstacle = Sphere | Box | Capsule | Plane | Mesh
-KINDS: dict[str, type] = {"sphere": Sphere, "box": Box, "capsule": Capsule, "plane": Plane, "mesh": Mesh}
+Obstacle = Sphere | Box | Capsule | Plane | Mesh | Prism
+KINDS: dict[str, type] = {"sphere": Sphere, "box": Box, "capsule": Capsule, "plane": Plane, "mesh": Mesh,
+                          "prism": Prism}
 KINDS_TUPLE = tuple(KINDS.values())
 
 
@@ -354,7 +379,7 @@ class Scene:
         obstacles = tuple(self.obstacles) if not isinstance(self.obstacles, KINDS_TUPLE) else (self.obstacles,)
         for k, o in enumerate(obstacles):
             if not isinstance(o, KINDS_TUPLE):
-                raise TaskError(f"obstacle {k} must be a Sphere, Box, Capsule, Plane or Mesh; got {o!r}")
+                raise TaskError(f"obstacle {k} must be a Sphere, Box, Capsule, Plane, Mesh or Prism; got {o!r}")
         names = [o.name for o in obstacles]
         repeated = sorted({n for n in names if names.count(n) > 1})
         if repeated:  # reports and recordings name obstacles; give each its own
@@ -392,6 +417,7 @@ TABLES: dict[str, tuple[tuple[str, ...], dict[str, str]]] = {
                                                  **_ROTATION}),
     "plane": (("point", "normal"), {"point": "list", "normal": "list"}),
     "mesh": (("path",), {"path": "text", "center": "list", "scale": "list", "spheres": "integer", **_ROTATION}),
+    "prism": (("points", "height"), {"points": "list", "height": "number", "bottom": "number", "spheres": "integer"}),
 }
 
 

@@ -83,8 +83,6 @@ from ..geometry.collision import RobotShape
 from ..costs import TERM_TYPES, Objective, Program, Term
 from ..costs.base import TermEntry
 from ..errors import MetaikError, SolverError, TaskError
-from .fabrik_tasks import ReachTask, is_reach_task, reach_task_from_dict
-from ..model.loading import load_robot
 from .placement import PlacementTask, is_placement_task, placement_task_from_dict
 from ..costs.problem import Problem
 from ..resources import data_dir
@@ -160,11 +158,11 @@ def resolve_task(name: str) -> Path:
     raise TaskError(f"task file {name} does not exist (and is not a shipped task: see `metaik tasks`)")
 
 
-def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | ReachTask | PlacementTask:
+def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | PlacementTask:
     """Parse and validate a task file; every error names the file and the entry at fault.
 
-    A file with a ``[reach]`` table is a reach task for M-FABRIK (:class:`framework.io.fabrik_tasks.ReachTask`);
-    one with a ``[placement]`` table a base-placement task (:class:`framework.io.placement.PlacementTask`).
+    A file with a ``[placement]`` table is a base-placement task (:class:`framework.io.placement.PlacementTask`);
+    every other one (IK, tracking, M-FABRIK's reach and paths) a :class:`TaskFile`.
 
     ``points`` overrides the number of waypoints of a tracking task (parametric paths are re-sampled, paths
     from files or lists keep ``points`` evenly spaced waypoints).
@@ -172,8 +170,6 @@ def load_task(path: str | Path, *, points: int | None = None) -> TaskFile | Reac
     path = Path(path)
     raw = read_toml(path)
     try:
-        if is_reach_task(raw):  # a position-reach task for M-FABRIK and its baselines
-            return reach_task_from_dict(raw, path, points=points)
         if is_placement_task(raw):  # where a mobile base should stand
             return placement_task_from_dict(raw, path)
         return _parse(path, raw, points=points)
@@ -191,9 +187,13 @@ def task_from_dict(raw: dict[str, Any], path: str | Path, *, points: int | None 
 def _parse(path: Path, raw: dict[str, Any], *, points: int | None = None) -> TaskFile:
     task = _table(raw, "task", path)
     unknown_tables = sorted(set(raw) - TABLES)
+    if "reach" in unknown_tables:
+        raise TaskError("[reach] tables are no more: an M-FABRIK task is an ordinary task file ([solver] name = "
+                        "\"mfabrik\" with [solver.options], [previous] the start, a [trajectory], [[terms]] and "
+                        "[[obstacles]]; see tasks/paper003_*.toml)")
     if unknown_tables:
-        raise TaskError(f"unknown tables {unknown_tables}; known: {sorted(TABLES)} (and [reach] or [placement] "
-                        "for those task kinds)")
+        raise TaskError(f"unknown tables {unknown_tables}; known: {sorted(TABLES)} (and [placement] "
+                        "for a base-placement task)")
     check_table(task, TASK_KEYS, "[task]")
     if "robot" not in task:
         raise TaskError("[task] needs a robot (index name or file path)")

@@ -1,5 +1,8 @@
 """Obstacles on the floor, the rejection area around them, and the admissible area of one target (paper 003).
 
+The obstacles are the shadows of a :class:`~framework.geometry.scene.Scene`'s (:meth:`Environment.from_scene`):
+discs (:class:`Circle`) and convex polygons (:class:`Polygon`) in the floor plane.
+
 The *rejection area* is every obstacle dilated by a safety margin (the paper: 20 cm); the base's reference point
 must stay out of it. The *navigable area* is a box (the base's search bounds by default) minus the rejection
 area; it may fall apart into several pieces. The *admissible area* of a target is where the base can still reach
@@ -72,15 +75,6 @@ class Polygon:
         return float(self.shape().distance(sg.Point(x, y)))
 
 
-def Rectangle(centre: tuple[float, float], size: tuple[float, float], angle: float = 0.0) -> Polygon:
-    """A rectangular obstacle: centre ``(x, y)`` [m], size ``(width along x, depth along y)`` [m], turned by
-    ``angle`` [rad] about its centre."""
-    (cx, cy), (w, d) = centre, size
-    c, s = math.cos(angle), math.sin(angle)
-    corners = [(-w / 2, -d / 2), (w / 2, -d / 2), (w / 2, d / 2), (-w / 2, d / 2)]
-    return Polygon(tuple((cx + c * u - s * v, cy + s * u + c * v) for u, v in corners))
-
-
 Obstacle = Circle | Polygon
 
 
@@ -118,13 +112,25 @@ class Environment:
 
     @classmethod
     def from_scene(cls, scene: Scene, *, margin: float = 0.2,
-                   bounds: tuple[tuple[float, float], tuple[float, float]] | None = None,
-                   obstacles: tuple[Obstacle, ...] = ()) -> Environment:
-        """The floor obstacles of a :class:`~framework.geometry.scene.Scene` (the one description the IK terms use): each
-        obstacle's shadow, a convex polygon containing it (a floor plane casts none), beside ``obstacles``."""
-        shadows = [o.footprint() for o in scene]
-        return cls(tuple(obstacles) + tuple(Polygon(tuple(map(tuple, s))) for s in shadows if s is not None),
-                   margin=margin, bounds=bounds)
+                   bounds: tuple[tuple[float, float], tuple[float, float]] | None = None) -> Environment:
+        """The floor obstacles of a :class:`~framework.geometry.scene.Scene` (the one description the IK terms use):
+        each obstacle's shadow — a disc where it is one (a ball, an upright capsule), else a convex polygon
+        containing it (a prism's own floor polygon); a floor plane casts none."""
+        shadows: list[Obstacle] = []
+        for o in scene:
+            disc = o.round_footprint()
+            if disc is not None:
+                shadows.append(Circle((disc[0], disc[1]), disc[2]))
+                continue
+            polygon = o.footprint()
+            if polygon is not None:
+                shadows.append(Polygon(tuple(map(tuple, np.asarray(polygon, dtype=float)))))
+        return cls(tuple(shadows), margin=margin, bounds=bounds)
+
+    @cached_property
+    def key(self) -> tuple:
+        """What defines the environment (its shadows, margin, box and resolution), as a hashable value."""
+        return (self.obstacles, self.margin, self.bounds, self.resolution)
 
     # ------------------------------------------------------------------ areas
     @cached_property

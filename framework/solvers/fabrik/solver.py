@@ -2,11 +2,16 @@
 
 ``solve(problem, "mfabrik")`` takes a reach problem: one :class:`~framework.costs.Position` task term (the
 end-effector's position), optionally an :class:`~framework.costs.Obstacles` term, whose scene's floor shadows are
-M-FABRIK's obstacles (:meth:`Environment.from_scene`, the one scene description), and regularizers (``Motion``),
-which the method does not minimize but the result reports like any term's value. A robot with a mobile base (the
+M-FABRIK's obstacles (:meth:`Environment.from_scene`, the one scene description: the base's reference point keeps
+``base_margin`` from them within the base's x, y bounds, paper 003's model; the exact check of the whole robot
+against the scene then decides success, as for every solver), and regularizers (``Motion``), which the method does
+not minimize but the result reports like any term's value. A robot with a mobile base (the
 ``"base"`` group, ``x, y, θ``) is solved by M-FABRIK (Algorithm 1: base and arm), a fixed-base arm by FABRIK. It
 starts from the warm start, else the regularizers' reference, else the box middle, and returns the common
-:class:`~framework.solvers.solve.IKResult`; ``tracking.track`` drives it along paths as any solver. What is
+:class:`~framework.solvers.solve.IKResult`, whose ``state`` holds ``base_path`` (the base pose ``(x, y, θ)`` after each
+iteration) and, with the option ``step``, ``steps``: Algorithm 2's intermediate configurations taking the base from
+the start (the previous waypoint's solution when tracking) to the solution in steps of at most ``step``
+(:class:`~framework.solvers.fabrik.Steps`); ``tracking.track`` drives it along paths as any solver. What is
 M-FABRIK-specific (chains, reach tables, regions, Algorithm 2) stays in this subpackage; the chain and reach table
 of a frame are built once per robot.
 """
@@ -14,12 +19,11 @@ of a frame are built once per robot.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
-
 import numpy as np
 
 from ...costs import Obstacles, Position
 from ...errors import SolverError
+from ...geometry.scene import Scene
 from ..ik import IKSolver, Outcome, Request
 from ..multistart import start_configuration
 from ..registry import register_ik
@@ -38,9 +42,8 @@ class MFabrikOptions:
         orientation: how M-FABRIK turns the base: ``"follow_joint1"`` (paper 003's path experiment),
             ``"face_target"`` or ``"fixed"`` (:class:`~framework.solvers.fabrik.BaseOrientation`).
         base_margin: distance [m] the base's reference point keeps from the obstacles' shadows (paper 003: 0.2).
-        environment: floor obstacles of M-FABRIK's own (circles, rectangles, polygons in the floor plane, with
-            their margin and navigable box: an :class:`~framework.solvers.fabrik.Environment`, as reach task files give
-            them), beside an Obstacles term's shadows (its margin then replaces ``base_margin``), or ``None``.
+        step: Algorithm 2's ρ [m] (paper 003: 0.1): the result's ``state["steps"]`` takes the base from the start
+            to the solution in steps of at most ``step``, around the obstacles (None: no steps).
         window: iterations without progress before a restart (``None``: the method's own, 4 for M-FABRIK, 10 for
             FABRIK); restarts: restarts from new arm shapes.
         keep_link: M-FABRIK's forward reaching keeps the first joint at its fixed height (True) or leaves it
@@ -51,11 +54,10 @@ class MFabrikOptions:
     base_margin: float = 0.2
     window: int | None = None
     restarts: int = 10
-    environment: Any = None
+    step: float | None = None
     keep_link: bool = True
 
     def __post_init__(self) -> None:
-        from .environment import Environment
         from .mobile import BaseOrientation
 
         known = [o.value for o in BaseOrientation]
@@ -65,9 +67,9 @@ class MFabrikOptions:
             raise SolverError(f"mfabrik base_margin must be a distance >= 0 [m]; got {self.base_margin!r}")
         if not isinstance(self.keep_link, bool):
             raise SolverError(f"mfabrik keep_link must be True or False; got {self.keep_link!r}")
-        if self.environment is not None and not isinstance(self.environment, Environment):
-            raise SolverError(f"mfabrik environment must be a framework.solvers.fabrik.Environment or None; "
-                              f"got {type(self.environment).__name__}")
+        if self.step is not None and not (isinstance(self.step, (int, float)) and not isinstance(self.step, bool)
+                                          and 0 < self.step < np.inf):
+            raise SolverError(f"mfabrik step must be a distance > 0 [m] or None; got {self.step!r}")
         for name in ("window", "restarts"):
             value = getattr(self, name)
             if value is None and name == "window":
@@ -111,17 +113,24 @@ class MFabrikSolver(IKSolver):
         result = planner.solve(position.target, x0, tolerance=request.tolerance,
                                max_iterations=request.max_iterations or DEFAULT_ITERATIONS, seed=request.seed)
         stop = _STOP.get(result.reason, "unreachable")
+        state = {"base_path": result.base_path}
+        if method == "m-fabrik" and self.options.step is not None:
+            from .steps import intermediate_configurations
+
+            state["steps"] = intermediate_configurations(planner, x0, result.configuration, position.target,
+                                                         self.options.step)
         environment = planner.environment if method == "m-fabrik" else None
         settings = {**self.options.__dict__, "method": method, "start": start, "reason": result.reason,
                     "environment": None if environment is None else
                     f"{len(environment.obstacles)} floor obstacles, margin {environment.margin:g} m",
                     "max_iterations": request.max_iterations or DEFAULT_ITERATIONS}
         return Outcome(result.configuration, stop, result.iterations, result.iterations,
-                       history=None, settings=settings, state={"base_path": result.base_path})
+                       history=None, settings=settings, state=state)
 
     def planner(self, robot, frame: str, obstacles: Obstacles | None = None):
-        """``("m-fabrik" | "fabrik", planner)``; the chain and reach table of ``frame`` are built once per robot, and
-        so is the planner without an Obstacles term (per options: its environment's areas are computed once)."""
+        """``("m-fabrik" | "fabrik", planner)``: M-FABRIK in the floor shadows of ``obstacles``' scene (none without
+        it), kept ``base_margin`` away from them within the base's x, y bounds, for a mobile base; FABRIK for a
+        fixed one. Chains, reach tables and planners are built once per robot, frame, options and shadows."""
         from .chain import PlanarChain
         from .environment import Environment
         from .fabrik import Fabrik
@@ -129,12 +138,13 @@ class MFabrikSolver(IKSolver):
         o = self.options
         window = {} if o.window is None else {"window": o.window}
         if "base" in robot.groups and robot.group("base").size == 3:
-            if obstacles is None:  # the scene of an Obstacles term may move between solves: made each time
-                return "m-fabrik", robot.derived(_m_fabrik, frame, o.environment, o)
-            given = o.environment or Environment(margin=o.base_margin)
-            return "m-fabrik", _m_fabrik(robot, frame, Environment.from_scene(
-                obstacles.scene, margin=given.margin, bounds=given.bounds, obstacles=given.obstacles), o)
-        if obstacles is not None or o.environment is not None:
+            ix, iy, _ = robot.group("base")
+            environment = Environment.from_scene(Scene() if obstacles is None else obstacles.scene,
+                                                 margin=o.base_margin, bounds=((robot.lower[ix], robot.upper[ix]),
+                                                                               (robot.lower[iy], robot.upper[iy])))
+            return "m-fabrik", robot.derived(_m_fabrik, frame, environment, o,
+                                             key=(frame, environment.key, o))
+        if obstacles is not None:
             raise SolverError("FABRIK (a fixed base) plans no way around obstacles: mfabrik takes an Obstacles term "
                               "for a mobile base only")
         chain = robot.derived(PlanarChain.from_robot, frame)
