@@ -31,10 +31,15 @@ from .solvers.batch import BatchResult, solve_batch
 from .geometry.collision import CollisionReport, Contact, RobotShape
 from .geometry.scene import Box, Capsule, Mesh, Plane, Prism, Scene, Sphere
 from .solvers import solver_names
+from .solvers.analytic import AnalyticSolutions, ClosedForm, analytic_ik, closed_form
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "AnalyticSolutions",
+    "ClosedForm",
+    "analytic_ik",
+    "closed_form",
     "ConfigurationError",
     "Evaluation",
     "IKResult",

@@ -43,6 +43,7 @@ def solvers_command(args, console: Console) -> int:
 def show_command(args, console: Console) -> int:
     import pinocchio as pin
 
+    from ..solvers.analytic import closed_form
     from .robots import load_robot_of
 
     robot = load_robot_of(args)
@@ -64,6 +65,10 @@ def show_command(args, console: Console) -> int:
         f"{g} ({', '.join(robot.coordinate_names[i] for i in idx)})" for g, idx in robot.groups.items()) or "none"),
         highlight=False)
     console.print(f"end-effectors: {', '.join(robot.end_effectors) or 'none'}", highlight=False)
+    for frame in robot.end_effectors:  # which ones inverse kinematics solves in closed form, and why not
+        form = closed_form(robot, frame)
+        console.print(f"closed form of {frame}: " + (form.family if form.exists else f"none ({form.reason})"),
+                      highlight=False)
     frames = [f.name for f in robot.model.frames
               if f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME) and f.name != "universe"]
     console.print(f"frames ({len(frames)}): {', '.join(frames)}", highlight=False)

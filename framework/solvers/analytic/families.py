@@ -1,0 +1,253 @@
+"""Every solution of a 6R arm whose axes allow a closed form, as a sequence of Paden-Kahan subproblems (compiled).
+
+The arm is given in product-of-exponentials form at its zero configuration: unit axes ``H`` ``(6, 3)`` and a point
+on each ``P`` ``(6, 3)`` [m], world frame; a pose of the end-effector ``T`` ``(4, 4)`` is met when
+``e^{ξ1 q1} ... e^{ξ6 q6} M = T``, i.e. ``e^{ξ1 q1} ... e^{ξ6 q6} = G = T M⁻¹``. The families (codes):
+
+- :data:`WRIST_PARALLEL` — a spherical wrist (axes 4, 5, 6 meet at ``c``) and axes 2 ∥ 3 (Puma 560, KUKA KR,
+  Fanuc, ABB): ``e^{ξ1}e^{ξ2}e^{ξ3} c = G c``; q1 keeps ``G c``'s height along axis 2 (sp4), q3 its distance from
+  axis 2 (sp3), q2 by sp1; then q4, q5 (sp2) and q6 (sp1) from the wrist's rotation. Up to 8 solutions.
+- :data:`WRIST_CROSSING` — a spherical wrist and axes 1, 2 meeting at ``o``: q3 keeps ``G c``'s distance from
+  ``o`` (sp3), q1, q2 by sp2, the wrist as above. Up to 8.
+- :data:`THREE_PARALLEL` — axes 2 ∥ 3 ∥ 4 and axes 5, 6 meeting at ``c`` (Universal Robots): q1 keeps ``G c``'s
+  height along axis 2 (sp4), q5 axis 6's (sp4), q2 + q3 + q4 and q6 by sp1, then q3 (sp3), q2 (sp1), q4. Up to 8.
+
+Parallel axes point the same way (the caller turns opposite ones). A singular configuration (a wrist with axes 4
+and 6 aligned, a point on an axis) has a continuum of solutions: the free angle is the reference configuration's.
+:func:`exact_solutions` checks every solution by forward kinematics and adds its 2π copies within the limits.
+Rotations are 3-tuples of columns and vectors 3-tuples (no allocation on the way).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...compiled.native import compiled, internal
+from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp2, sp3, sp4,
+                          sub, times)
+
+WRIST_PARALLEL, WRIST_CROSSING, THREE_PARALLEL = 1, 2, 3
+#: Solutions of one pose before 2π copies: at most 8.
+MOST = 8
+
+
+@internal(inline=True)
+def _apply(h, r, theta, x):
+    """``e^{ξ θ} x``: the point ``x`` turned by θ about the axis through ``r`` along ``h``."""
+    return add(rotate(h, theta, sub(x, r)), r)
+
+
+@internal(inline=True)
+def _of(R, v):
+    """``R v`` for a rotation given as a 3-tuple of columns."""
+    return add(add(scale(v[0], R[0]), scale(v[1], R[1])), scale(v[2], R[2]))
+
+
+@internal(inline=True)
+def _unit_across(a, b):
+    """A unit vector across ``a``: along ``a × b``."""
+    n = cross(a, b)
+    return scale(1.0 / norm(n), n)
+
+
+@internal
+def _wrist(H, RG, q1, q2, q3, reference, out, n):
+    """Append to ``out[n:]`` the solutions ``(q1, q2, q3, q4, q5, q6)`` of the wrist rotation ``R123ᵀ R_G``: q4, q5
+    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count."""
+    h1, h2, h3, h4, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 3), row(H, 4), row(H, 5)
+    target = rotate(h3, -q3, rotate(h2, -q2, rotate(h1, -q1, _of(RG, h6))))
+    count, a1, a2, b1, b2 = sp2(h6, target, h4, h5, reference[3], reference[4])
+    across = _unit_across(h6, h4) if norm(cross(h6, h4)) > 1e-6 else _unit_across(h6, h5)
+    seen = rotate(h3, -q3, rotate(h2, -q2, rotate(h1, -q1, _of(RG, across))))
+    for j in range(branches(count)):
+        t4, t5 = (a1, a2) if j == 0 else (b1, b2)
+        t6 = sp1(across, rotate(h5, -t5, rotate(h4, -t4, seen)), h6, reference[5])
+        out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4], out[n, 5] = q1, q2, q3, t4, t5, t6
+        n += 1
+    return n
+
+
+@internal
+def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
+    """The solutions of the spherical-wrist families (see the module docstring); returns their count."""
+    h1, h2, h3 = row(H, 0), row(H, 1), row(H, 2)
+    p1, p2, p3 = row(P, 0), row(P, 1), row(P, 2)
+    w = add(_of(RG, c), tG)
+    n = 0
+    if code == WRIST_PARALLEL:
+        count1, u, v = sp4(h2, sub(w, p1), h1, dot(h2, sub(c, p1)), -reference[0])
+        for i in range(branches(count1)):
+            q1 = -u if i == 0 else -v
+            w1 = _apply(h1, p1, -q1, w)
+            count3, a, b = sp3(sub(c, p3), sub(p2, p3), h3, norm(sub(w1, p2)), reference[2])
+            for j in range(branches(count3)):
+                q3 = a if j == 0 else b
+                y3 = _apply(h3, p3, q3, c)
+                q2 = sp1(sub(y3, p2), sub(w1, p2), h2, reference[1])
+                n = _wrist(H, RG, q1, q2, q3, reference, out, n)
+    else:  # WRIST_CROSSING: axes 1 and 2 meet at P[0] (the caller put the meeting point there)
+        count3, a, b = sp3(sub(c, p3), sub(p1, p3), h3, norm(sub(w, p1)), reference[2])
+        for j in range(branches(count3)):
+            q3 = a if j == 0 else b
+            y3 = _apply(h3, p3, q3, c)
+            count12, s1, s2, t1, t2 = sp2(sub(y3, p1), sub(w, p1), h1, h2, reference[0], reference[1])
+            for i in range(branches(count12)):
+                q1, q2 = (s1, s2) if i == 0 else (t1, t2)
+                n = _wrist(H, RG, q1, q2, q3, reference, out, n)
+    return n
+
+
+@internal
+def _three_parallel(H, P, c, RG, tG, reference, out):
+    """The solutions of the three-parallel-axes family (see the module docstring); returns their count."""
+    h1, h2, h3, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 4), row(H, 5)
+    p1, p2, p3, p4 = row(P, 0), row(P, 1), row(P, 2), row(P, 3)
+    w = add(_of(RG, c), tG)
+    across = _unit_across(h6, h5)
+    G6, Gacross = _of(RG, h6), _of(RG, across)
+    n = 0
+    count1, u, v = sp4(h2, sub(w, p1), h1, dot(h2, sub(c, p1)), -reference[0])
+    for i in range(branches(count1)):
+        q1 = -u if i == 0 else -v
+        A6, Aacross = rotate(h1, -q1, G6), rotate(h1, -q1, Gacross)  # rot(h1, q1)ᵀ R_G applied
+        w1 = _apply(h1, p1, -q1, w)
+        count5, a5, b5 = sp4(h2, h6, h5, dot(h2, A6), reference[4])
+        for j in range(branches(count5)):
+            q5 = a5 if j == 0 else b5
+            theta = sp1(rotate(h5, q5, h6), A6, h2, reference[1] + reference[2] + reference[3])
+            q6 = sp1(across, rotate(h5, -q5, rotate(h2, -theta, Aacross)), h6, reference[5])
+            x4 = sub(w1, rotate(h2, theta, sub(c, p4)))  # where axis 4's point goes under e^{ξ2 q2} e^{ξ3 q3}
+            count3, a3, b3 = sp3(sub(p4, p3), sub(p2, p3), h3, norm(sub(x4, p2)), reference[2])
+            for m in range(branches(count3)):
+                q3 = a3 if m == 0 else b3
+                q2 = sp1(sub(_apply(h3, p3, q3, p4), p2), sub(x4, p2), h2, reference[1])
+                out[n, 0], out[n, 1], out[n, 2] = q1, q2, q3
+                out[n, 3], out[n, 4], out[n, 5] = theta - q2 - q3, q5, q6
+                n += 1
+    return n
+
+
+@internal
+def _pose_error(H, P, M, T, q):
+    """``max(‖Δt‖ [m], ‖Δω‖ [rad])`` between ``e^{ξ1 q1} ... e^{ξ6 q6} M`` and ``T`` ``(3, 4)``."""
+    r0, r1, r2, t = column(M, 0), column(M, 1), column(M, 2), column(M, 3)
+    for i in range(5, -1, -1):
+        h, p = row(H, i), row(P, i)
+        cs, sn = np.cos(q[i]), np.sin(q[i])
+        r0, r1, r2 = rotate_cs(h, cs, sn, r0), rotate_cs(h, cs, sn, r1), rotate_cs(h, cs, sn, r2)
+        t = add(rotate_cs(h, cs, sn, sub(t, p)), p)
+    c0, c1, c2 = column(T, 0), column(T, 1), column(T, 2)
+    trace = dot(r0, c0) + dot(r1, c1) + dot(r2, c2)
+    cos = min(1.0, max(-1.0, 0.5 * (trace - 1.0)))
+    if cos < 0.999999:
+        angle = np.arccos(cos)
+    else:  # the skew part of Rᵀ T: sin φ, accurate near 0
+        angle = 0.5 * np.sqrt((dot(r2, c1) - dot(r1, c2)) ** 2 + (dot(r0, c2) - dot(r2, c0)) ** 2
+                              + (dot(r1, c0) - dot(r0, c1)) ** 2)
+    return max(norm(sub(t, column(T, 3))), angle)
+
+
+#: Offsets in a chain's table (:func:`table`): axes, points, wrist centre, M and M⁻¹ (3 x 4), limits, signs.
+AXES, POINTS, CENTRE, M_AT, MINV_AT, LOWER, UPPER, SIGNS, TABLE = 0, 18, 36, 39, 51, 63, 69, 75, 81
+
+
+def table(axes, points, centre, M, Minv, lower, upper, signs) -> np.ndarray:
+    """A chain's data for :func:`exact_solutions` in one array ``(81,)`` (see :data:`TABLE`)."""
+    return np.concatenate([np.ravel(axes), np.ravel(points), centre, np.ravel(M[:3]), np.ravel(Minv[:3]), lower,
+                           upper, signs]).astype(float)
+
+
+@compiled
+def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
+    """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``:
+    ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits (turned by its signs like its axes;
+    ``chain``: :func:`table`), each with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by
+    forward kinematics), nearest to ``x_ref`` first."""
+    H = chain[AXES:POINTS].reshape((6, 3))
+    P = chain[POINTS:CENTRE].reshape((6, 3))
+    c = chain[CENTRE:M_AT]
+    M = chain[M_AT:MINV_AT].reshape((3, 4))
+    Minv = chain[MINV_AT:LOWER].reshape((3, 4))
+    lower, upper, signs = chain[LOWER:UPPER], chain[UPPER:SIGNS], chain[SIGNS:TABLE]
+    T = np.empty((3, 4))
+    for i in range(3):
+        T[i, 3] = pose[i]
+        for j in range(3):
+            T[i, j] = pose[3 + 3 * i + j]
+    reference = np.empty(6)
+    for i in range(6):
+        reference[i] = signs[i] * x_ref[coordinates[i]]
+    RG = (times(T, column(Minv, 0)), times(T, column(Minv, 1)), times(T, column(Minv, 2)))
+    tG = add(times(T, column(Minv, 3)), column(T, 3))
+    centre = (c[0], c[1], c[2])
+    raw = np.empty((MOST, 6))
+    if code == THREE_PARALLEL:
+        count = _three_parallel(H, P, centre, RG, tG, reference, raw)
+    else:
+        count = _spherical_wrist(code, H, P, centre, RG, tG, reference, raw)
+    total = 0
+    copies = np.zeros(MOST, dtype=np.int64)
+    for s in range(count):
+        for i in range(6):  # into [-π, π]
+            raw[s, i] -= 2.0 * np.pi * np.floor((raw[s, i] + np.pi) / (2.0 * np.pi))
+        if _pose_error(H, P, M, T, raw[s]) > tolerance:
+            continue
+        duplicate = False
+        for other in range(s):
+            if copies[other] > 0:
+                apart = 0.0
+                for i in range(6):
+                    gap = abs(raw[other, i] - raw[s, i])
+                    apart = max(apart, min(gap, 2.0 * np.pi - gap))
+                duplicate = duplicate or apart < 1e-9
+        if not duplicate:
+            copies[s] = _count_copies(raw[s], lower, upper)
+            total += copies[s]
+    chain = np.empty((total, 6))
+    k = 0
+    for s in range(count):
+        if copies[s] > 0:
+            _write_copies(raw[s], lower, upper, chain, k)
+            k += copies[s]
+    distance = np.empty(total)
+    for m in range(total):
+        distance[m] = ((chain[m] - reference) ** 2).sum()
+    order = np.argsort(distance)
+    out = np.empty((total, x_ref.shape[0]))
+    for m in range(total):
+        out[m] = x_ref
+        for i in range(6):
+            out[m, coordinates[i]] = signs[i] * chain[order[m], i]
+    return out
+
+
+@internal
+def _first_copy(value, lower):
+    """The smallest ``value + 2πm`` >= ``lower`` (less a rounding slack)."""
+    return value + 2.0 * np.pi * np.ceil((lower - value) / (2.0 * np.pi) - 1e-12)
+
+
+@internal
+def _count_copies(q, lower, upper):
+    """How many 2π copies of ``q`` ``(6,)`` lie within ``[lower, upper]`` (0 when a joint has none)."""
+    total = 1
+    for i in range(6):
+        first = _first_copy(q[i], lower[i])
+        total *= max(0, int(np.floor((upper[i] + 1e-12 - first) / (2.0 * np.pi))) + 1)
+    return total
+
+
+@internal
+def _write_copies(q, lower, upper, out, at):
+    """Write the 2π copies of ``q`` within the limits into ``out[at:]`` (as many as :func:`_count_copies`)."""
+    counts = np.empty(6, dtype=np.int64)
+    total = 1
+    for i in range(6):
+        counts[i] = max(0, int(np.floor((upper[i] + 1e-12 - _first_copy(q[i], lower[i])) / (2.0 * np.pi))) + 1)
+        total *= counts[i]
+    for m in range(total):
+        rest = m
+        for i in range(6):
+            value = _first_copy(q[i], lower[i]) + 2.0 * np.pi * (rest % counts[i])
+            out[at + m, i] = min(upper[i], max(lower[i], value))
+            rest //= counts[i]

@@ -1,0 +1,137 @@
+"""Closed-form IK (framework.solvers.analytic): the family read from the model, every solution exact by Pinocchio's
+forward kinematics and within the limits, and none missing — against the numeric solver from many starts."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import framework as fw
+from framework.errors import TaskError
+from tests.conftest import example_robot_data_dir
+
+ERD = example_robot_data_dir()
+
+
+def _kr6() -> fw.Robot:
+    rtbdata = pytest.importorskip("rtbdata")
+    kuka = Path(rtbdata.__path__[0]) / "xacro" / "kuka_description"
+    return fw.load_robot(kuka / "kuka_kr6" / "urdf" / "kr6r700sixx.xacro",
+                         package_dirs={"kuka_kr6_support": kuka / "kuka_kr6", "kuka_resources": kuka / "kuka_resources"})
+
+
+#: robot, frame, the family expected
+ARMS = {
+    "ur5": (lambda: fw.load_robot(ERD / "ur_description" / "urdf" / "ur5_robot.urdf"), "tool0", "axes 2 ∥ 3 ∥ 4"),
+    "ur10": (lambda: fw.load_robot(ERD / "ur_description" / "urdf" / "ur10_robot.urdf"), "tool0", "axes 2 ∥ 3 ∥ 4"),
+    "puma560": (lambda: fw.load_robot("puma560"), "ee", "spherical wrist, axes 2 ∥ 3"),
+    "fanuc": (lambda: fw.load_robot("fanuc_am120ib"), "ee", "spherical wrist, axes 2 ∥ 3"),
+    "kr6": (_kr6, "tool0", "spherical wrist, axes 2 ∥ 3"),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(ARMS))
+def arm(request):
+    make, frame, family = ARMS[request.param]
+    return make(), frame, family
+
+
+def _pose_error(robot: fw.Robot, x: np.ndarray, frame: str, target: pin.SE3) -> float:
+    reached = robot.frame_placement(x, frame)
+    return max(float(np.linalg.norm(reached.translation - target.translation)),
+               float(np.linalg.norm(pin.log3(reached.rotation.T @ target.rotation))))
+
+
+def test_every_solution_is_exact_within_the_limits_and_the_sampled_one_is_first(arm):
+    """Poses of random configurations: each solution meets the pose to 1e-10 (m, rad) by Pinocchio's FK, lies in
+    the limits, none twice; with the sampled configuration as reference it comes first (distance 0: a solver
+    missing the sample's own branch would fail here); the others follow by distance."""
+    robot, frame, family = arm
+    form = fw.closed_form(robot, frame)
+    assert form.family is not None and form.family.startswith(family)
+    rng = np.random.default_rng(7)
+    counts = []
+    for x in robot.random_configurations(rng, 40):
+        target = robot.frame_placement(x, frame)
+        found = fw.analytic_ik(robot, frame, target, reference=x)
+        X = found.configurations
+        counts.append(len(X))
+        assert found.reachable and found.reason == ""
+        np.testing.assert_allclose(X[0], x, atol=1e-8)
+        assert max(_pose_error(robot, q, frame, target) for q in X) <= 1e-10
+        assert np.all(X >= robot.lower - 1e-12) and np.all(X <= robot.upper + 1e-12)
+        distances = np.linalg.norm(X - x, axis=1)
+        assert np.all(np.diff(distances) >= -1e-12)
+        apart = np.abs(X[:, None] - X[None]).max(axis=2) + np.eye(len(X))
+        assert apart.min() > 1e-6
+    assert np.mean(counts) >= 2  # a 6R arm's poses have 2-8 solutions (times their 2π copies)
+
+
+def test_no_solution_is_missing(arm):
+    """For a few poses, the numeric solver from 60 random starts: every configuration it finds (pose within 1e-9)
+    is one of the closed form's (a brute-force search for the solution set, which a missed branch fails)."""
+    robot, frame, _ = arm
+    rng = np.random.default_rng(3)
+    found = 0
+    for x in robot.random_configurations(rng, 3):
+        target = robot.frame_placement(x, frame)
+        X = fw.analytic_ik(robot, frame, target).configurations
+        problem = fw.Problem(robot, fw.Pose(frame, target))
+        for start in robot.random_configurations(rng, 60):
+            result = fw.solve(problem, "multistart_lm", initial=start, seed=0, tolerance=1e-12)
+            if _pose_error(robot, result.configuration, frame, target) <= 1e-9:
+                assert np.abs(X - result.configuration).max(axis=1).min() <= 1e-6
+                found += 1
+    assert found >= 60  # most numeric solves converge: the check is not vacuous
+
+
+def test_a_pose_beyond_reach_or_limits_says_so():
+    """Beyond reach: no solution and the reason; within reach but every solution's joint 1 outside a narrowed
+    range: none, and that reason."""
+    robot = fw.load_robot("puma560")
+    found = fw.analytic_ik(robot, "ee", pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.0])))
+    assert not found.reachable and len(found) == 0 and "beyond the arm's reach" in found.reason
+    x = robot.random_configurations(np.random.default_rng(1), 1)[0]
+    target = robot.frame_placement(x, "ee")
+    q1 = np.sort(fw.analytic_ik(robot, "ee", target).configurations[:, 0])
+    gaps = np.diff(np.concatenate([[robot.lower[0]], q1, [robot.upper[0]]]))
+    k = int(np.argmax(gaps))  # the widest stretch of joint 1's range holding no solution
+    low = robot.lower[0] if k == 0 else q1[k - 1]
+    narrow = robot.with_bounds({robot.joints[0].name: (low + 0.01, low + gaps[k] - 0.01)})
+    hidden = fw.analytic_ik(narrow, "ee", target)
+    assert len(hidden) == 0 and "outside the joint limits" in hidden.reason
+
+
+def test_chains_without_a_closed_form_say_why():
+    cases = {"youbot_arm": "5 joints", "baxter_arm": "7 joints", "stanford_arm": "other than revolute"}
+    for name, why in cases.items():
+        robot = fw.load_robot(name)
+        form = fw.closed_form(robot, robot.end_effectors[0])
+        assert form.family is None and why in form.reason
+        with pytest.raises(TaskError, match="no closed form"):
+            fw.analytic_ik(robot, robot.end_effectors[0], pin.SE3.Identity())
+
+
+def test_continuous_joints_get_their_2pi_copies():
+    """UR5's joints span ±2π: every base solution comes with each 2π copy of each joint within the limits."""
+    robot = fw.load_robot(ERD / "ur_description" / "urdf" / "ur5_robot.urdf")
+    x = robot.random_configurations(np.random.default_rng(0), 1)[0]
+    target = robot.frame_placement(x, "tool0")
+    X = fw.analytic_ik(robot, "tool0", target).configurations
+    bases = np.unique(np.round(np.mod(X + np.pi, 2 * np.pi) - np.pi, 8), axis=0)
+    shifts = 2 * np.pi * np.arange(-3, 4)
+    copies = [np.prod([np.sum((robot.lower[i] <= b[i] + shifts) & (b[i] + shifts <= robot.upper[i])) for i in range(6)])
+              for b in bases]
+    assert len(bases) >= 2 and len(X) == sum(copies) > len(bases)
+
+
+def test_show_prints_the_closed_form_of_each_end_effector(capsys):
+    from framework.cli import EXIT_OK, main
+
+    assert main(["show", "puma560"]) == EXIT_OK
+    assert "closed form of ee: spherical wrist, axes 2 ∥ 3" in capsys.readouterr().out
+    assert main(["show", "youbot_arm"]) == EXIT_OK
+    assert "closed form of ee: none (its chain has 5 joints" in capsys.readouterr().out.replace("\n", " ")
