@@ -31,7 +31,7 @@ from .solvers.batch import BatchResult, solve_batch
 from .geometry.collision import CollisionReport, Contact, RobotShape
 from .geometry.scene import Box, Capsule, Mesh, Plane, Prism, Scene, Sphere
 from .solvers import solver_names
-from .solvers.analytic import AnalyticSolutions, ClosedForm, analytic_ik, closed_form
+from .solvers.analytic import AnalyticBatch, AnalyticSolutions, ClosedForm, analytic_ik, analytic_ik_batch, closed_form
 
 __version__ = "0.1.0"
 
@@ -39,6 +39,8 @@ __all__ = [
     "AnalyticSolutions",
     "ClosedForm",
     "analytic_ik",
+    "analytic_ik_batch",
+    "AnalyticBatch",
     "closed_form",
     "ConfigurationError",
     "Evaluation",

@@ -81,7 +81,8 @@ def test_no_solution_is_missing(arm):
         X = fw.analytic_ik(robot, frame, target).configurations
         problem = fw.Problem(robot, fw.Pose(frame, target))
         for start in robot.random_configurations(rng, 60):
-            result = fw.solve(problem, "multistart_lm", initial=start, seed=0, tolerance=1e-12)
+            result = fw.solve(problem, "multistart_lm", initial=start, seed=0, tolerance=1e-12,
+                              options={"closed_form": False})  # the numeric engine alone
             if _pose_error(robot, result.configuration, frame, target) <= 1e-9:
                 assert np.abs(X - result.configuration).max(axis=1).min() <= 1e-6
                 found += 1
@@ -135,3 +136,23 @@ def test_show_prints_the_closed_form_of_each_end_effector(capsys):
     assert "closed form of ee: spherical wrist, axes 2 ∥ 3" in capsys.readouterr().out
     assert main(["show", "youbot_arm"]) == EXIT_OK
     assert "closed form of ee: none (its chain has 5 joints" in capsys.readouterr().out.replace("\n", " ")
+
+
+def test_a_pose_solve_starts_from_the_closed_form():
+    """fw.solve on a pose of a closed-form arm starts from its exact solution (the engine has nothing left to do);
+    with a motion regularizer, from the solution it prefers (the least cost: checked against every solution's
+    cost); a baseline solver is not seeded."""
+    robot = fw.load_robot("puma560")
+    rng = np.random.default_rng(5)
+    x, start = robot.random_configurations(rng, 2)
+    target = robot.frame_placement(x, "ee")
+    result = fw.solve(fw.Problem(robot, fw.Pose("ee", target)), initial=start)
+    assert result.settings["start"] == "closed form" and result.success and result.iterations <= 1
+    X = fw.analytic_ik(robot, "ee", target, reference=start).configurations
+    np.testing.assert_allclose(result.configuration, X[0], atol=1e-9)
+    far = X[-1]  # a motion term pulling towards the farthest solution: that one costs least
+    problem = fw.Problem(robot, fw.Pose("ee", target) + 0.1 * fw.Motion("all", far))
+    result = fw.solve(problem, initial=start)
+    costs = problem.cost(X)
+    np.testing.assert_allclose(result.configuration, X[np.argmin(costs)], atol=1e-6)
+    assert fw.solve(fw.Problem(robot, fw.Pose("ee", target)), "dls", initial=start).settings["start"] == "initial"

@@ -31,7 +31,8 @@ def test_batch_items_equal_one_by_one_solves(puma, solver):
     batch = fw.solve_batch(problem, T, solver, seed=11, tolerance=1e-7)
     assert batch.compiled.mean() > 0.9  # most items in the compiled loop (else this test checks nothing new)
     for i in range(len(T)):
-        one = fw.solve(fw.Problem(robot, fw.Pose("ee", T[i])), solver, seed=11 + i, tolerance=1e-7)
+        one = fw.solve(fw.Problem(robot, fw.Pose("ee", T[i])), solver, seed=11 + i, tolerance=1e-7,
+                       options={"closed_form": False})  # the batch's engine alone: the same descent
         np.testing.assert_array_equal(batch.configurations[i], one.configuration)
         assert batch.success[i] == one.success
         assert batch.costs[i] == pytest.approx(one.cost, abs=1e-15)
@@ -86,7 +87,7 @@ def test_warm_starts_threads_and_other_solvers(puma):
     one_thread = fw.solve_batch(problem, T[:20], initial=near, seed=3, workers=1)
     two = fw.solve_batch(problem, T[:20], initial=near, seed=3, workers=2)
     np.testing.assert_array_equal(one_thread.configurations, two.configurations)
-    first = fw.solve(fw.Problem(robot, fw.Pose("ee", T[0])), seed=3, initial=near[0])
+    first = fw.solve(fw.Problem(robot, fw.Pose("ee", T[0])), seed=3, initial=near[0], options={"closed_form": False})
     np.testing.assert_array_equal(one_thread.configurations[0], first.configuration)
     # a metaheuristic has no compiled batch plan: item by item through solve, same answers
     de = fw.solve_batch(problem, T[:3], "de", seed=2, max_iterations=20)

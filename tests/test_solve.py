@@ -329,10 +329,13 @@ import framework as fw
 robot = fw.load_robot("puma560")
 rng = np.random.default_rng(4)
 targets = [robot.frame_placement(x, "ee") for x in robot.random_configurations(rng, 3)]
-runs = [fw.solve(fw.Problem(robot, fw.Pose("ee", M)), time_budget=0.005, seed=k) for k, M in enumerate(targets)]
+seeded = fw.solve(fw.Problem(robot, fw.Pose("ee", targets[0])), time_budget=0.005)
+runs = [fw.solve(fw.Problem(robot, fw.Pose("ee", M)), time_budget=0.005, seed=k, options={"closed_form": False})
+        for k, M in enumerate(targets)]
 cma = fw.solve(fw.Problem(robot, fw.Pose("ee", targets[0])), "cmaes", time_budget=0.5, max_iterations=40)
 print(json.dumps({"engine": [[r.success, r.stop_reason, r.iterations] for r in runs],
-                  "cmaes": [cma.stop_reason, cma.iterations]}))
+                  "cmaes": [cma.stop_reason, cma.iterations],
+                  "seeded": [seeded.success, seeded.settings["start"], seeded.stop_reason]}))
 """
 
 
@@ -340,8 +343,9 @@ def test_the_first_solve_of_a_process_has_its_whole_time_budget():
     """A process's first call of a solver's compiled code loads it from numba's disk cache (about half a second
     for the engine, more for pycma's import; minutes to compile on a fresh install): ``solve`` loads it before the
     time budget starts (``IKSolver.prepare``). So the first solve of a fresh process with a 5 ms budget reaches a
-    reachable Puma pose as the later ones do (before: 0 iterations, ``time_budget``, every first solve), and a
-    first CMA-ES solve with a 0.5 s budget runs its 40 generations (before: 1, the import ate the budget)."""
+    reachable Puma pose as the later ones do (before: 0 iterations, ``time_budget``, every first solve), a first
+    CMA-ES solve with a 0.5 s budget runs its 40 generations (before: 1, the import ate the budget), and a first
+    solve starting from the closed form reaches the pose within its budget too."""
     import json
     import subprocess
     import sys
@@ -353,4 +357,5 @@ def test_the_first_solve_of_a_process_has_its_whole_time_budget():
     report = json.loads(out.stdout.strip().splitlines()[-1])
     assert [run[:2] for run in report["engine"]] == [[True, "tolerance"]] * 3, report
     assert all(run[2] > 0 for run in report["engine"])
+    assert report["seeded"] == [True, "closed form", "tolerance"], report
     assert report["cmaes"] == ["max_iterations", 40], report

@@ -235,6 +235,11 @@ class Term:
         """Whether any of :meth:`hull_pairs` is loose (its rows' spheres are fatter than its hulls)."""
         return False
 
+    def pose_target(self) -> tuple[str, np.ndarray] | None:
+        """``(frame, (12,) position [m] and row-major rotation)`` when the term is met exactly where that frame has
+        that pose (a pose term: the closed form of an arm solves it), else ``None``."""
+        return None
+
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         """Frame -> the world point ``(3,)`` [m] it should reach at configuration ``x`` (for drawing targets)."""
         return {}

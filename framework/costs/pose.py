@@ -116,6 +116,9 @@ class Pose(Term):
     def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
         return reach_hint(robot, self.frame, self.position)
 
+    def pose_target(self) -> tuple[str, np.ndarray]:
+        return self.frame, self._parameters
+
     def parameters(self, robot: Robot) -> np.ndarray:
         return self._parameters
 

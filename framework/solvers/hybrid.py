@@ -48,6 +48,8 @@ from ..optimizers.base import resolve_options
 from ..optimizers.registry import get_solver
 from ..validate import positive_int
 from .metaheuristic import compiled_or_loop, shared_loop, within
+from .analytic.seeding import prepare as prepare_closed_form
+from .analytic.seeding import settles
 from .multistart import default_iterations, local_settings, start_configuration, stop_reason
 from .registry import register_ik
 
@@ -75,6 +77,8 @@ class HybridOptions:
         restarts: random restarts of the engine within its budget.
         stall: engine iterations without progress before a restart.
         polish: Gauss-Newton steps after reaching the tolerance.
+        closed_form: start from the closed-form solution of least cost where the pose task's arm has one
+            (:mod:`framework.solvers.analytic`).
     """
 
     global_solver: str = "cmaes_fast"
@@ -85,6 +89,7 @@ class HybridOptions:
     stall: int = 6
     polish: int = 3
     regularize: bool = True
+    closed_form: bool = True
 
     def __post_init__(self) -> None:
         if self.global_iterations is not None:
@@ -93,7 +98,7 @@ class HybridOptions:
         # stored as the ints they were checked to be (an integral float such as 8.0 is a valid count)
         object.__setattr__(self, "stall", positive_int(self.stall, "hybrid option stall"))
         object.__setattr__(self, "polish", positive_int(self.polish, "hybrid option polish", minimum=0))
-        for flag in ("warm_start", "restarts", "regularize"):
+        for flag in ("warm_start", "restarts", "regularize", "closed_form"):
             if not isinstance(getattr(self, flag), bool):
                 raise SolverError(f"hybrid option {flag} must be true or false; got {getattr(self, flag)!r}")
         if not isinstance(self.global_solver, str):
@@ -124,8 +129,10 @@ class Hybrid(IKSolver):
         self._basin: dict[LocalSettings, LocalSettings] = {}  # their warm-start variants (_in_basin's table)
 
     def prepare(self, problem) -> None:
-        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`)."""
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`), and the closed form's."""
         prepare_engine(problem.program)
+        if self.options.closed_form:
+            prepare_closed_form(problem)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start (restarts after it only from the box middle); none when a global phase
@@ -135,7 +142,7 @@ class Hybrid(IKSolver):
         if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers) \
                 or self.clears_first(problem):
             return None
-        x0, start = start_configuration(problem, request, o.warm_start)
+        x0, start = start_configuration(problem, request, o.warm_start, closed_form=False)
         budget = default_iterations(request)
         settings = local_settings(request, o, budget, self._settings)
         report = self._report(start, budget, 0, None, request)
@@ -144,8 +151,10 @@ class Hybrid(IKSolver):
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options
-        x0, start = start_configuration(problem, request, o.warm_start)
+        x0, start = start_configuration(problem, request, o.warm_start, closed_form=o.closed_form)
         budget = default_iterations(request)
+        if start == "closed form" and settles(problem):  # the exact solution is the answer: no descent
+            return Outcome(x0, "tolerance", 0, 0, None, self._report(start, budget, 0, None, request))
         settings = local_settings(request, o, budget, self._settings)
         draws = stream(request.seed)  # the engine's restarts, one stream through every phase
         first = settings if start == "middle" or not o.restarts else self._in_basin(settings)

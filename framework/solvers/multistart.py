@@ -19,6 +19,9 @@ from ..engine import prepare as prepare_engine
 from .ik import BatchPlan, IKSolver, Outcome, Request
 from ..validate import positive_int
 from .registry import register_ik
+from .analytic.seeding import closed_form_start
+from .analytic.seeding import prepare as prepare_closed_form
+from .analytic.seeding import settles
 
 #: Levenberg-Marquardt iterations (over all restarts) when ``solve`` is given neither an iteration nor a time budget.
 DEFAULT_ITERATIONS = 2000
@@ -34,6 +37,8 @@ class MultistartOptions:
         polish: Gauss-Newton steps after reaching the tolerance (to machine precision).
         regularize: minimize the regularizers on the task afterwards.
         warm_start: without ``initial``, start where the regularizers measure from (e.g. ``q_prev``).
+        closed_form: start from the closed-form solution of least cost where the pose task's arm has one
+            (:mod:`framework.solvers.analytic`).
     """
 
     stall: int = 6
@@ -41,6 +46,7 @@ class MultistartOptions:
     polish: int = 3
     regularize: bool = True
     warm_start: bool = True
+    closed_form: bool = True
 
     def __post_init__(self) -> None:
         # stored as the ints they were checked to be (an integral float such as 8.0 is a valid count)
@@ -55,14 +61,20 @@ def default_iterations(request: Request) -> int:
     return 10**9 if request.deadline is not None else DEFAULT_ITERATIONS
 
 
-def start_configuration(problem, request: Request, warm_start: bool) -> tuple[np.ndarray, str]:
+def start_configuration(problem, request: Request, warm_start: bool, *, closed_form: bool = True
+                        ) -> tuple[np.ndarray, str]:
     """The first start and where it came from: ``initial``, the regularizers' reference
     (:attr:`~framework.costs.problem.Problem.previous`), or the box middle (the robot's own, read-only: the engine
-    copies its start)."""
+    copies its start) — or, where the problem's pose task falls on an arm solved in closed form, that arm's exact
+    solution of least cost, nearest that start among equals (:func:`~.analytic.seeding.closed_form_start`; not with
+    ``closed_form=False``: a batch's start serves every target)."""
     if request.initial is not None:
-        return request.initial[0].copy(), "initial"
-    previous = problem.previous if warm_start else None
-    return (previous, "previous") if previous is not None else (problem.robot.middle, "middle")
+        x0, start = request.initial[0].copy(), "initial"
+    else:
+        previous = problem.previous if warm_start else None
+        x0, start = (previous, "previous") if previous is not None else (problem.robot.middle, "middle")
+    seeded = closed_form_start(problem, x0) if closed_form else None
+    return (x0, start) if seeded is None else (seeded, "closed form")
 
 
 def local_settings(request: Request, options, max_iterations: int, made: dict) -> LocalSettings:
@@ -100,18 +112,23 @@ class MultistartLM(IKSolver):
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
 
     def prepare(self, problem) -> None:
-        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`)."""
+        """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`), and the closed form's."""
         prepare_engine(problem.program)
+        if self.options.closed_form:
+            prepare_closed_form(problem)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan:
-        x0, start = start_configuration(problem, request, self.options.warm_start)
+        x0, start = start_configuration(problem, request, self.options.warm_start, closed_form=False)
         iterations = default_iterations(request)
         settings = local_settings(request, self.options, iterations, self._settings)
         return BatchPlan(x0, settings, escalates=False, report=self._report(start, iterations, 0, None))
 
     def solve(self, problem, request: Request) -> Outcome:
-        x0, start = start_configuration(problem, request, self.options.warm_start)
+        x0, start = start_configuration(problem, request, self.options.warm_start,
+                                        closed_form=self.options.closed_form)
         iterations = default_iterations(request)
+        if start == "closed form" and settles(problem):  # the exact solution is the answer: no descent
+            return Outcome(x0, "tolerance", 0, 0, None, self._report(start, iterations, 0, None))
         settings = local_settings(request, self.options, iterations, self._settings)
         result = solve_local(problem.program, x0, request.seed, settings, deadline=request.deadline)
         if request.callback is not None:

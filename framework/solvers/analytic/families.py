@@ -51,14 +51,16 @@ def _unit_across(a, b):
 
 
 @internal
-def _wrist(H, RG, q1, q2, q3, reference, out, n):
+def _wrist(H, RG, q1, cs1, q2, q3, reference, out, n):
     """Append to ``out[n:]`` the solutions ``(q1, q2, q3, q4, q5, q6)`` of the wrist rotation ``R123ᵀ R_G``: q4, q5
-    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count."""
+    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count (``cs1``: the cosine
+    and sine of ``-q1``)."""
     h1, h2, h3, h4, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 3), row(H, 4), row(H, 5)
-    target = rotate(h3, -q3, rotate(h2, -q2, rotate(h1, -q1, _of(RG, h6))))
+    c2, s2, c3, s3 = np.cos(q2), -np.sin(q2), np.cos(q3), -np.sin(q3)
+    target = rotate_cs(h3, c3, s3, rotate_cs(h2, c2, s2, rotate_cs(h1, cs1[0], cs1[1], _of(RG, h6))))
     count, a1, a2, b1, b2 = sp2(h6, target, h4, h5, reference[3], reference[4])
     across = _unit_across(h6, h4) if norm(cross(h6, h4)) > 1e-6 else _unit_across(h6, h5)
-    seen = rotate(h3, -q3, rotate(h2, -q2, rotate(h1, -q1, _of(RG, across))))
+    seen = rotate_cs(h3, c3, s3, rotate_cs(h2, c2, s2, rotate_cs(h1, cs1[0], cs1[1], _of(RG, across))))
     for j in range(branches(count)):
         t4, t5 = (a1, a2) if j == 0 else (b1, b2)
         t6 = sp1(across, rotate(h5, -t5, rotate(h4, -t4, seen)), h6, reference[5])
@@ -78,13 +80,14 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
         count1, u, v = sp4(h2, sub(w, p1), h1, dot(h2, sub(c, p1)), -reference[0])
         for i in range(branches(count1)):
             q1 = -u if i == 0 else -v
-            w1 = _apply(h1, p1, -q1, w)
+            cs1 = (np.cos(q1), -np.sin(q1))
+            w1 = add(rotate_cs(h1, cs1[0], cs1[1], sub(w, p1)), p1)
             count3, a, b = sp3(sub(c, p3), sub(p2, p3), h3, norm(sub(w1, p2)), reference[2])
             for j in range(branches(count3)):
                 q3 = a if j == 0 else b
                 y3 = _apply(h3, p3, q3, c)
                 q2 = sp1(sub(y3, p2), sub(w1, p2), h2, reference[1])
-                n = _wrist(H, RG, q1, q2, q3, reference, out, n)
+                n = _wrist(H, RG, q1, cs1, q2, q3, reference, out, n)
     else:  # WRIST_CROSSING: axes 1 and 2 meet at P[0] (the caller put the meeting point there)
         count3, a, b = sp3(sub(c, p3), sub(p1, p3), h3, norm(sub(w, p1)), reference[2])
         for j in range(branches(count3)):
@@ -93,7 +96,7 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
             count12, s1, s2, t1, t2 = sp2(sub(y3, p1), sub(w, p1), h1, h2, reference[0], reference[1])
             for i in range(branches(count12)):
                 q1, q2 = (s1, s2) if i == 0 else (t1, t2)
-                n = _wrist(H, RG, q1, q2, q3, reference, out, n)
+                n = _wrist(H, RG, q1, (np.cos(q1), -np.sin(q1)), q2, q3, reference, out, n)
     return n
 
 
@@ -157,19 +160,18 @@ def table(axes, points, centre, M, Minv, lower, upper, signs) -> np.ndarray:
                            upper, signs]).astype(float)
 
 
-@compiled
-def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
-    """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``:
-    ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits (turned by its signs like its axes;
-    ``chain``: :func:`table`), each with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by
-    forward kinematics), nearest to ``x_ref`` first."""
+@internal
+def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copies):
+    """The distinct exact solutions of the pose ``(12,)`` in ``[-π, π]`` into ``raw`` ``(8, 6)`` (the chain's
+    coordinates, turned by its signs), each one's count of 2π copies within the limits into ``copies`` (0: not
+    kept: outside the limits, inexact or a repeat); returns how many rows of ``raw`` were filled."""
     H = chain[AXES:POINTS].reshape((6, 3))
     P = chain[POINTS:CENTRE].reshape((6, 3))
     c = chain[CENTRE:M_AT]
     M = chain[M_AT:MINV_AT].reshape((3, 4))
     Minv = chain[MINV_AT:LOWER].reshape((3, 4))
     lower, upper, signs = chain[LOWER:UPPER], chain[UPPER:SIGNS], chain[SIGNS:TABLE]
-    T = np.empty((3, 4))
+    T = np.empty((3, 4))  # [R | t] from the position and the row-major rotation
     for i in range(3):
         T[i, 3] = pose[i]
         for j in range(3):
@@ -180,17 +182,16 @@ def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
     RG = (times(T, column(Minv, 0)), times(T, column(Minv, 1)), times(T, column(Minv, 2)))
     tG = add(times(T, column(Minv, 3)), column(T, 3))
     centre = (c[0], c[1], c[2])
-    raw = np.empty((MOST, 6))
     if code == THREE_PARALLEL:
         count = _three_parallel(H, P, centre, RG, tG, reference, raw)
     else:
         count = _spherical_wrist(code, H, P, centre, RG, tG, reference, raw)
-    total = 0
-    copies = np.zeros(MOST, dtype=np.int64)
     for s in range(count):
+        copies[s] = 0
         for i in range(6):  # into [-π, π]
             raw[s, i] -= 2.0 * np.pi * np.floor((raw[s, i] + np.pi) / (2.0 * np.pi))
-        if _pose_error(H, P, M, T, raw[s]) > tolerance:
+        kept = _count_copies(raw[s], lower, upper)
+        if kept == 0 or _pose_error(H, P, M, T, raw[s]) > tolerance:
             continue
         duplicate = False
         for other in range(s):
@@ -201,24 +202,102 @@ def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
                     apart = max(apart, min(gap, 2.0 * np.pi - gap))
                 duplicate = duplicate or apart < 1e-9
         if not duplicate:
-            copies[s] = _count_copies(raw[s], lower, upper)
-            total += copies[s]
-    chain = np.empty((total, 6))
+            copies[s] = kept
+    return count
+
+
+@compiled
+def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
+    """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``: ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits
+    (``chain``: :func:`table`), each with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by
+    forward kinematics), nearest to ``x_ref`` first."""
+    raw = np.empty((MOST, 6))
+    copies = np.zeros(MOST, dtype=np.int64)
+    count = _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copies)
+    lower, upper, signs = chain[LOWER:UPPER], chain[UPPER:SIGNS], chain[SIGNS:TABLE]
+    total = copies.sum()
+    found = np.empty((total, 6))
     k = 0
     for s in range(count):
         if copies[s] > 0:
-            _write_copies(raw[s], lower, upper, chain, k)
+            _write_copies(raw[s], lower, upper, found, k)
             k += copies[s]
     distance = np.empty(total)
     for m in range(total):
-        distance[m] = ((chain[m] - reference) ** 2).sum()
+        d = 0.0
+        for i in range(6):
+            d += (signs[i] * found[m, i] - x_ref[coordinates[i]]) ** 2
+        distance[m] = d
     order = np.argsort(distance)
     out = np.empty((total, x_ref.shape[0]))
     for m in range(total):
         out[m] = x_ref
         for i in range(6):
-            out[m, coordinates[i]] = signs[i] * chain[order[m], i]
+            out[m, coordinates[i]] = signs[i] * found[order[m], i]
     return out
+
+
+@compiled(nogil=True)
+def nearest_solutions(code, chain, coordinates, poses, x_ref, tolerance, out, counts):
+    """For each pose ``poses[b]`` ``(12,)``: its distinct solutions, each as its 2π copy within the limits nearest
+    to ``x_ref``, into ``out[b]`` ``(8, 6)`` (the chain's coordinates, nearest first) and their number into
+    ``counts[b]`` — a batch's compiled loop (no allocation per pose; the GIL released)."""
+    raw = np.empty((MOST, 6))
+    copies = np.zeros(MOST, dtype=np.int64)
+    distance = np.empty(MOST)
+    for b in range(poses.shape[0]):
+        counts[b] = _nearest(code, chain, coordinates, poses[b], x_ref, tolerance, raw, copies, distance, out[b])
+
+
+@compiled
+def nearest_configurations(code, chain, coordinates, pose, x_ref, tolerance):
+    """``(k, n)``: the pose's solutions once each, as :func:`nearest_solutions`, as robot configurations (``x_ref``
+    with the chain's coordinates set)."""
+    raw = np.empty((MOST, 6))
+    copies = np.zeros(MOST, dtype=np.int64)
+    distance = np.empty(MOST)
+    found = np.empty((MOST, 6))
+    count = _nearest(code, chain, coordinates, pose, x_ref, tolerance, raw, copies, distance, found)
+    out = np.empty((count, x_ref.shape[0]))
+    for m in range(count):
+        out[m] = x_ref
+        for i in range(6):
+            out[m, coordinates[i]] = found[m, i]
+    return out
+
+
+@internal
+def _nearest(code, chain, coordinates, pose, x_ref, tolerance, raw, copies, distance, out):
+    """The solutions of one pose into ``out`` ``(8, 6)``, each as its 2π copy within the limits nearest ``x_ref``,
+    nearest first; returns their number (``raw``, ``copies``, ``distance``: scratch)."""
+    lower, upper, signs = chain[LOWER:UPPER], chain[UPPER:SIGNS], chain[SIGNS:TABLE]
+    count = _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copies)
+    kept = 0
+    for s in range(count):
+        if copies[s] == 0:
+            continue
+        d = 0.0
+        for i in range(6):  # the copy nearest the reference, within the limits
+            target = signs[i] * x_ref[coordinates[i]]
+            value = raw[s, i] + 2.0 * np.pi * np.round((target - raw[s, i]) / (2.0 * np.pi))
+            if value < lower[i] - 1e-12:
+                value += 2.0 * np.pi
+            elif value > upper[i] + 1e-12:
+                value -= 2.0 * np.pi
+            raw[kept, i] = signs[i] * min(upper[i], max(lower[i], value))
+            d += (value - target) ** 2
+        distance[kept] = d
+        kept += 1
+    for m in range(kept):  # nearest first (a selection sort: at most 8)
+        best = m
+        for o in range(m + 1, kept):
+            if distance[o] < distance[best]:
+                best = o
+        distance[m], distance[best] = distance[best], distance[m]
+        for i in range(6):
+            raw[m, i], raw[best, i] = raw[best, i], raw[m, i]
+            out[m, i] = raw[m, i]
+    return kept
 
 
 @internal

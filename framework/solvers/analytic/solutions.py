@@ -20,7 +20,8 @@ from ...costs.pose import pose_parameters
 from ...errors import TaskError
 from ...model.joints import JointKind
 from ...model.robot import Robot
-from .families import THREE_PARALLEL, WRIST_CROSSING, WRIST_PARALLEL, exact_solutions, table
+from .families import (MOST, THREE_PARALLEL, WRIST_CROSSING, WRIST_PARALLEL, exact_solutions, nearest_configurations,
+                       nearest_solutions, table)
 
 #: Two axes closer than this [rad of direction, m of distance] are taken as parallel / meeting.
 GEOMETRY = 1e-9
@@ -64,12 +65,27 @@ class ClosedForm:
     def exists(self) -> bool:
         return self.family is not None
 
+    def nearest(self, pose: np.ndarray, x_ref: np.ndarray, tolerance: float = 1e-10) -> np.ndarray:
+        """``(k, n)`` each exact solution of the world pose ``(12,)`` once, as its 2π copy within the limits nearest
+        ``x_ref`` ``(n,)`` (the others keep its values), nearest first."""
+        # (one array type for each argument: a read-only or non-contiguous one is another compiled signature)
+        return nearest_configurations(self.code, self.tables[0], self.coordinates, _writable(pose),
+                                      _writable(x_ref), float(tolerance))
+
     def solutions(self, pose: np.ndarray, x_ref: np.ndarray, tolerance: float = 1e-10, *,
                   limits: bool = True) -> np.ndarray:
         """``(k, n)`` every exact solution of the world pose ``(12,)`` (position [m], row-major rotation), the
         chain's coordinates set in ``x_ref`` ``(n,)``, within the joint limits (or each once in [-π, π] without
         ``limits``), nearest to ``x_ref`` first."""
-        return exact_solutions(self.code, self.tables[0 if limits else 1], self.coordinates, pose, x_ref, tolerance)
+        return exact_solutions(self.code, self.tables[0 if limits else 1], self.coordinates, _writable(pose),
+                               _writable(x_ref), float(tolerance))
+
+
+def _writable(a) -> np.ndarray:
+    """``a`` as a writable C-contiguous float array (itself when it is one)."""
+    if type(a) is np.ndarray and a.dtype == np.float64 and a.flags.c_contiguous and a.flags.writeable:
+        return a
+    return np.array(a, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -119,6 +135,65 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
               if len(form.solutions(packed, x_ref, tolerance, limits=False)) else
               "the pose is beyond the arm's reach (no exact solution)")
     return AnalyticSolutions(X, form.family, reason)
+
+
+@dataclass(frozen=True)
+class AnalyticBatch:
+    """The solutions of a batch of poses, each once: as its 2π copy within the limits nearest the reference.
+
+    Attributes:
+        chain: ``(B, 8, 6)`` the chain's coordinates of each pose's solutions, nearest to the reference first (rows
+            past ``counts[b]`` are NaN).
+        counts: ``(B,)`` how many each pose has (0: beyond reach, or every one outside the limits).
+        coordinates: ``(6,)`` the chain's coordinates in the robot's joint vector.
+        reference: ``(n,)`` the reference configuration (the joints off the chain keep its values).
+    """
+
+    chain: np.ndarray
+    counts: np.ndarray
+    coordinates: np.ndarray
+    reference: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.counts)
+
+    def configurations(self, b: int) -> np.ndarray:
+        """``(counts[b], n)`` the robot configurations of pose ``b``'s solutions, nearest first."""
+        X = np.repeat(self.reference[None], self.counts[b], axis=0)
+        X[:, self.coordinates] = self.chain[b, : self.counts[b]]
+        return X
+
+    @property
+    def nearest(self) -> np.ndarray:
+        """``(B, n)`` each pose's solution nearest to the reference (a NaN row for a pose without any)."""
+        X = np.repeat(self.reference[None], len(self.counts), axis=0)
+        X[:, self.coordinates] = self.chain[:, 0]
+        return X
+
+
+def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray | None = None,
+                      tolerance: float = 1e-10, workers: int | None = None) -> AnalyticBatch:
+    """:func:`analytic_ik` over a batch of poses (``(B, 4, 4)`` homogeneous matrices, or a sequence of any form a
+    :class:`~framework.costs.Pose` takes), in one compiled loop on ``workers`` threads (default: every core); each
+    solution once, as its 2π copy nearest ``reference`` (default: the middle of the bounds)."""
+    from ...costs import Pose
+    from ...engine.batch import in_chunks
+
+    form = closed_form(robot, frame)
+    if not form.exists:
+        raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
+    x_ref = np.array(robot.middle if reference is None else _reference(robot, reference), dtype=float)
+    packed = np.ascontiguousarray(Pose(frame, pin.SE3.Identity()).target_parameters(robot, poses))
+    chain = np.full((len(packed), MOST, 6), np.nan)
+    counts = np.zeros(len(packed), dtype=np.int64)
+
+    def work(items: np.ndarray) -> None:
+        a, b = int(items[0]), int(items[-1]) + 1
+        nearest_solutions(form.code, form.tables[0], form.coordinates, packed[a:b], x_ref, tolerance, chain[a:b],
+                          counts[a:b])
+
+    in_chunks(work, len(packed), workers=workers)
+    return AnalyticBatch(chain, counts, form.coordinates, x_ref)
 
 
 def _reference(robot: Robot, reference) -> np.ndarray:

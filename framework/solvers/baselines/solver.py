@@ -71,7 +71,7 @@ class JacobianBaseline(IKSolver):
         raise NotImplementedError
 
     def solve(self, problem, request: Request) -> Outcome:
-        x0, start = start_configuration(problem, request, True)
+        x0, start = start_configuration(problem, request, True, closed_form=False)
         o = self.options
         cap = request.max_iterations or DEFAULT_ITERATIONS
         run = jacobian_ik(problem.program, x0, self.inverse_of, gain=o.gain, max_step=o.max_step,

@@ -108,7 +108,7 @@ class MFabrikSolver(IKSolver):
         if request.deadline is not None or request.callback is not None:
             raise SolverError("mfabrik runs to its iteration cap: it takes no time_budget and no callback")
         position, obstacles = reach_task(problem)
-        x0, start = start_configuration(problem, request, True)
+        x0, start = start_configuration(problem, request, True, closed_form=False)
         method, planner = self.planner(problem.robot, position.frame, obstacles)
         result = planner.solve(position.target, x0, tolerance=request.tolerance,
                                max_iterations=request.max_iterations or DEFAULT_ITERATIONS, seed=request.seed)
