@@ -150,14 +150,19 @@ def _pose_error(H, P, M, T, q):
     return max(norm(sub(t, column(T, 3))), angle)
 
 
-#: Offsets in a chain's table (:func:`table`): axes, points, wrist centre, M and M⁻¹ (3 x 4), limits, signs.
-AXES, POINTS, CENTRE, M_AT, MINV_AT, LOWER, UPPER, SIGNS, TABLE = 0, 18, 36, 39, 51, 63, 69, 75, 81
+#: Offsets in a chain's table (:func:`table`): axes, points, wrist centre, M and M⁻¹ (3 x 4) as the pose check
+#: and G read them, limits, signs, and for a chain read from the tool back (``REVERSED`` 1) the tool's M (3 x 4).
+AXES, POINTS, CENTRE, M_AT, MINV_AT, LOWER, UPPER, SIGNS, REVERSED, TOOL, TABLE = (0, 18, 36, 39, 51, 63, 69, 75, 81,
+                                                                                  82, 94)
 
 
-def table(axes, points, centre, M, Minv, lower, upper, signs) -> np.ndarray:
-    """A chain's data for :func:`exact_solutions` in one array ``(81,)`` (see :data:`TABLE`)."""
+def table(axes, points, centre, M, Minv, lower, upper, signs, tool=None) -> np.ndarray:
+    """A chain's data for :func:`exact_solutions` in one array (see :data:`TABLE`); ``tool``: the frame's placement
+    at zero ``(4, 4)`` of a chain read from the tool back (its axes reversed: a pose ``T`` is solved as
+    ``M T⁻¹``, with ``M``, ``M⁻¹`` the identity)."""
+    flip = np.zeros(13) if tool is None else np.concatenate([[1.0], np.ravel(tool[:3])])
     return np.concatenate([np.ravel(axes), np.ravel(points), centre, np.ravel(M[:3]), np.ravel(Minv[:3]), lower,
-                           upper, signs]).astype(float)
+                           upper, signs, flip]).astype(float)
 
 
 @internal
@@ -176,6 +181,8 @@ def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copie
         T[i, 3] = pose[i]
         for j in range(3):
             T[i, j] = pose[3 + 3 * i + j]
+    if chain[REVERSED] > 0.5:  # read from the tool back: solve M T⁻¹ = e^{-ξ6 q6} ... e^{-ξ1 q1}
+        T = _tool_over(chain[TOOL:TABLE].reshape((3, 4)), T)
     reference = np.empty(6)
     for i in range(6):
         reference[i] = signs[i] * x_ref[coordinates[i]]
@@ -206,8 +213,26 @@ def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copie
     return count
 
 
+@internal
+def _tool_over(M, T):
+    """``M T⁻¹`` ``(3, 4)`` of two ``(3, 4)`` rigid transforms."""
+    out = np.empty((3, 4))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = M[i, 0] * T[j, 0] + M[i, 1] * T[j, 1] + M[i, 2] * T[j, 2]  # R_M R_Tᵀ
+    for i in range(3):
+        out[i, 3] = M[i, 3] - (out[i, 0] * T[0, 3] + out[i, 1] * T[1, 3] + out[i, 2] * T[2, 3])
+    return out
+
+
 @compiled
 def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
+    """:func:`every_solution` from Python."""
+    return every_solution(code, chain, coordinates, pose, x_ref, tolerance)
+
+
+@internal
+def every_solution(code, chain, coordinates, pose, x_ref, tolerance):
     """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``: ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits
     (``chain``: :func:`table`), each with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by
     forward kinematics), nearest to ``x_ref`` first."""
@@ -251,6 +276,12 @@ def nearest_solutions(code, chain, coordinates, poses, x_ref, tolerance, out, co
 
 @compiled
 def nearest_configurations(code, chain, coordinates, pose, x_ref, tolerance):
+    """:func:`nearest_configuration_set` from Python."""
+    return nearest_configuration_set(code, chain, coordinates, pose, x_ref, tolerance)
+
+
+@internal
+def nearest_configuration_set(code, chain, coordinates, pose, x_ref, tolerance):
     """``(k, n)``: the pose's solutions once each, as :func:`nearest_solutions`, as robot configurations (``x_ref``
     with the chain's coordinates set)."""
     raw = np.empty((MOST, 6))

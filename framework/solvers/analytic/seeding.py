@@ -2,7 +2,9 @@
 its solve starts from the solution that costs least (the numeric engine then has nothing left to do for a pose
 alone, and the rest — regularizers over other joints, collision terms, a second arm — from the right branch).
 
-Only the first pose task term with a closed form is used; without one, nothing changes (a lookup per solve).
+Only the first pose task term with a closed form is used; without one, nothing changes (a lookup per solve). A 7R
+arm's closed form (a searched joint, :mod:`~.free_joint`) does not seed: the numeric engine alone was faster there
+(benchmarks/closed_form.py).
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ def closed_form_start(problem, x0: np.ndarray) -> np.ndarray | None:
         if target is None:
             continue
         form = closed_form(robot, target[0])
-        if not form.exists:
+        if not form.exists or form.free.size:
             continue
         if len(problem.objective) == 1:  # the pose alone: every solution costs 0, the nearest is taken
             X = form.nearest(target[1], x0)
@@ -49,7 +51,8 @@ def prepare(problem) -> None:
     :meth:`~framework.solvers.ik.IKSolver.prepare`; once per robot and frame: a prepared solve pays a lookup)."""
     for _, term in problem.objective:
         target = term.pose_target() if term.is_task else None
-        if target is not None and closed_form(problem.robot, target[0]).exists:
+        form = None if target is None else closed_form(problem.robot, target[0])
+        if form is not None and form.exists and not form.free.size:
             problem.robot.derived(_load, target[0])
             return
 
