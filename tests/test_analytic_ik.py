@@ -189,3 +189,26 @@ def test_a_7r_arm_searches_one_joint(arm7):
             assert _pose_error(robot, q, frame, target) <= 1e-10
             assert np.all(q >= robot.lower - 1e-12) and np.all(q <= robot.upper + 1e-12)
     assert found >= 98
+
+
+def test_tracking_with_the_closed_form_takes_the_least_motion_at_every_waypoint():
+    """Paper 002's Puma circle (position, orientation and an L1 motion term to the previous waypoint) tracked by the
+    ``closed_form`` solver: every waypoint exact (1e-12), and its configuration the one of least L1 motion from the
+    previous among all the pose's solutions (a brute force over fw.analytic_ik's set): no branch flips that a
+    nearer solution would avoid."""
+    from framework.io.taskfile import load_task
+    from framework.resources import data_dir
+    from framework.tracking import track
+
+    task = load_task(data_dir("tasks") / "paper002_puma_circle.toml")
+    case = task.cases[0]
+    result = track(task.robot, case.trajectory, case.builder, solver="closed_form", initial=case.initial,
+                   progress=False)
+    assert result.position_error.max() <= 1e-12 and result.orientation_error.max() <= 1e-12
+    previous = case.initial
+    for k, x in enumerate(result.configurations):
+        target = pin.SE3(case.trajectory.rotation(k), case.trajectory.positions[k])
+        X = fw.analytic_ik(task.robot, "ee", target, reference=previous).configurations
+        motion = np.abs(X - previous).sum(axis=1)
+        assert np.abs(x - previous).sum() <= motion.min() + 1e-9
+        previous = x

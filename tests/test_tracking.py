@@ -254,9 +254,11 @@ def _one_solve_per_waypoint(robot, path, spec, solver, initial, seed=0, toleranc
     for k in range(path.K):
         spec.update(problem.objective, path.positions[k], path.rotation(k), previous)
         first = k == 0 and solver == "hybrid"
+        options = {"global_iterations": FIRST_GLOBAL_ITERATIONS} if first else {}
+        if solver in ("hybrid", "multistart_lm"):  # track's descents from the previous solution, not a closed form
+            options["closed_form"] = False
         results.append(solve(problem, solver, seed=rng, max_iterations=DEFAULTS.max_iterations, tolerance=tolerance,
-                             initial=previous[None], options={"global_iterations": FIRST_GLOBAL_ITERATIONS}
-                             if first else None))
+                             initial=previous[None], options=options or None))
         previous = results[-1].configuration
         if after is not None:  # what a callback does after waypoint k
             after(k, results[-1])

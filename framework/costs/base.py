@@ -235,9 +235,10 @@ class Term:
         """Whether any of :meth:`hull_pairs` is loose (its rows' spheres are fatter than its hulls)."""
         return False
 
-    def pose_target(self) -> tuple[str, np.ndarray] | None:
-        """``(frame, (12,) position [m] and row-major rotation)`` when the term is met exactly where that frame has
-        that pose (a pose term: the closed form of an arm solves it), else ``None``."""
+    def frame_target(self) -> tuple[str, np.ndarray | None, np.ndarray | None] | None:
+        """``(frame, position (3,) [m] or None, rotation (3, 3) or None)`` when the term is met exactly where that
+        frame has that position and / or rotation (position, orientation and pose terms: the closed form of an arm
+        solves them), else ``None``."""
         return None
 
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:

@@ -122,6 +122,9 @@ class Orientation(Term):
         self.target = rotation_from(target, f"orientation target of {self.frame!r}", self.quaternion)
         self._touch()
 
+    def frame_target(self) -> tuple[str, None, np.ndarray]:
+        return self.frame, None, self.target
+
     def target_parameters(self, robot: Robot, targets) -> np.ndarray:
         """``(B, 9)`` row-major target rotations of a batch: ``(B, 3, 3)`` matrices are validated at once (as
         :meth:`set_target` validates one); other forms one by one."""

@@ -116,8 +116,12 @@ class Pose(Term):
     def why_unmet(self, robot: Robot, x: np.ndarray) -> str | None:
         return reach_hint(robot, self.frame, self.position)
 
-    def pose_target(self) -> tuple[str, np.ndarray]:
-        return self.frame, self._parameters
+    def frame_target(self) -> tuple[str, np.ndarray, np.ndarray]:
+        return self.frame, self._parameters[:3], self._parameters[3:].reshape(3, 3)
+
+    def pose_vector(self) -> np.ndarray:
+        """``(12,)`` the target's position [m] and row-major rotation (the term's own array: read, do not write)."""
+        return self._parameters
 
     def parameters(self, robot: Robot) -> np.ndarray:
         return self._parameters

@@ -102,5 +102,8 @@ class Position(Term):
     def target_points(self, robot: Robot, x: np.ndarray) -> dict[str, np.ndarray]:
         return {self.frame: self.target}
 
+    def frame_target(self) -> tuple[str, np.ndarray, None]:
+        return self.frame, self.target, None
+
     def __repr__(self) -> str:
         return f"Position({self.frame!r}, {np.round(self.target, 6).tolist()})"

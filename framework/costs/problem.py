@@ -112,6 +112,22 @@ class Problem:
         return self.program.weights.copy()
 
     @cached_property
+    def fixed_frames(self) -> tuple[tuple[str, tuple, int], ...]:
+        """The frames whose position and rotation the task terms fix together: ``(frame, terms, count)`` with the
+        terms giving its position and its rotation (:meth:`~framework.costs.Term.frame_target`; one term for a pose)
+        and how many task terms place it; read the targets from the terms (they may move)."""
+        found: dict[str, list] = {}
+        for _, term in self.objective:
+            target = term.frame_target() if term.is_task else None
+            if target is None:
+                continue
+            entry = found.setdefault(target[0], [None, None, 0])
+            entry[0] = term if target[1] is not None else entry[0]
+            entry[1] = term if target[2] is not None else entry[1]
+            entry[2] += 1
+        return tuple((frame, (p, r), count) for frame, (p, r, count) in found.items() if p is not None and r is not None)
+
+    @cached_property
     def task_mask(self) -> np.ndarray:
         """``(k,)`` True for task terms."""
         return np.array([t.is_task for _, t in self.objective], dtype=bool)

@@ -100,6 +100,10 @@ def track(
         raise TaskError(f"warm_spread must be a number >= 0 [rad / m]; got {warm_spread!r}")
     q0 = robot.middle.copy() if initial is None else robot.check_population(initial, "initial configuration")[0].copy()
     options = dict(options or {})
+    if "closed_form" in ik_solver(solver).option_names and "closed_form" not in options:
+        # one method along the path: the compiled stretches descend from the previous solution, and so does every
+        # waypoint solved alone (solver="closed_form" tracks by the closed form: each waypoint's nearest solution)
+        options["closed_form"] = False
     method = ik_solver(solver, options)  # checks the name and the options once
     predict = method.carries_distribution if predict is None else bool(predict)
     check_settings(seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
