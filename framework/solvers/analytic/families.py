@@ -11,6 +11,10 @@ on each ``P`` ``(6, 3)`` [m], world frame; a pose of the end-effector ``T`` ``(4
   ``o`` (sp3), q1, q2 by sp2, the wrist as above. Up to 8.
 - :data:`THREE_PARALLEL` — axes 2 ∥ 3 ∥ 4 and axes 5, 6 meeting at ``c`` (Universal Robots): q1 keeps ``G c``'s
   height along axis 2 (sp4), q5 axis 6's (sp4), q2 + q3 + q4 and q6 by sp1, then q3 (sp3), q2 (sp1), q4. Up to 8.
+- :data:`FIVE_PARALLEL` — five joints, axes 2 ∥ 3 ∥ 4 (the youBot arm), held in slots 2-6 of the six (slot 1 a
+  joint that does not move): q1 keeps axis 5's point's height along axis 2 (sp4), q2 + q3 + q4 turns axis 5's
+  direction into place (sp1), q5 by sp1, then q3 (sp3), q2 (sp1), q4. Up to 4; a pose whose orientation the arm
+  cannot take has none (the check by forward kinematics rejects the nearest miss).
 
 Parallel axes point the same way (the caller turns opposite ones). A singular configuration (a wrist with axes 4
 and 6 aligned, a point on an axis) has a continuum of solutions: the free angle is the reference configuration's.
@@ -26,7 +30,7 @@ from ...compiled.native import compiled, internal
 from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp2, sp3, sp4,
                           sub, times)
 
-WRIST_PARALLEL, WRIST_CROSSING, THREE_PARALLEL = 1, 2, 3
+WRIST_PARALLEL, WRIST_CROSSING, THREE_PARALLEL, FIVE_PARALLEL = 1, 2, 3, 4
 #: Solutions of one pose before 2π copies: at most 8.
 MOST = 8
 
@@ -131,6 +135,33 @@ def _three_parallel(H, P, c, RG, tG, reference, out):
 
 
 @internal
+def _five_parallel(H, P, RG, tG, reference, out):
+    """The solutions of the five-joint family (see the module docstring; joints in slots 1-5); returns their count."""
+    h1, h2, h3, h5 = row(H, 1), row(H, 2), row(H, 3), row(H, 5)
+    p1, p2, p3, p4, p5 = row(P, 1), row(P, 2), row(P, 3), row(P, 4), row(P, 5)
+    w = add(_of(RG, p5), tG)
+    across = _unit_across(h5, h2)
+    G5, Gacross = _of(RG, h5), _of(RG, across)
+    n = 0
+    count1, u, v = sp4(h2, sub(w, p1), h1, dot(h2, sub(p5, p1)), -reference[1])
+    for i in range(branches(count1)):
+        q1 = -u if i == 0 else -v
+        A5, Aacross = rotate(h1, -q1, G5), rotate(h1, -q1, Gacross)  # rot(h1, q1)ᵀ R_G applied
+        w1 = _apply(h1, p1, -q1, w)
+        theta = sp1(h5, A5, h2, reference[2] + reference[3] + reference[4])
+        q5 = sp1(across, rotate(h2, -theta, Aacross), h5, reference[5])
+        x4 = sub(w1, rotate(h2, theta, sub(p5, p4)))  # where axis 4's point goes under e^{ξ2 q2} e^{ξ3 q3}
+        count3, a3, b3 = sp3(sub(p4, p3), sub(p2, p3), h3, norm(sub(x4, p2)), reference[3])
+        for m in range(branches(count3)):
+            q3 = a3 if m == 0 else b3
+            q2 = sp1(sub(_apply(h3, p3, q3, p4), p2), sub(x4, p2), h2, reference[2])
+            out[n, 0], out[n, 1], out[n, 2], out[n, 3] = 0.0, q1, q2, q3
+            out[n, 4], out[n, 5] = theta - q2 - q3, q5
+            n += 1
+    return n
+
+
+@internal
 def _pose_error(H, P, M, T, q):
     """``max(‖Δt‖ [m], ‖Δω‖ [rad])`` between ``e^{ξ1 q1} ... e^{ξ6 q6} M`` and ``T`` ``(3, 4)``."""
     r0, r1, r2, t = column(M, 0), column(M, 1), column(M, 2), column(M, 3)
@@ -191,6 +222,8 @@ def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copie
     centre = (c[0], c[1], c[2])
     if code == THREE_PARALLEL:
         count = _three_parallel(H, P, centre, RG, tG, reference, raw)
+    elif code == FIVE_PARALLEL:
+        count = _five_parallel(H, P, RG, tG, reference, raw)
     else:
         count = _spherical_wrist(code, H, P, centre, RG, tG, reference, raw)
     for s in range(count):

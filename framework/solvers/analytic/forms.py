@@ -12,14 +12,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .families import THREE_PARALLEL, WRIST_CROSSING, WRIST_PARALLEL, exact_solutions, nearest_configurations, table
+from .families import (FIVE_PARALLEL, THREE_PARALLEL, WRIST_CROSSING, WRIST_PARALLEL, exact_solutions,
+                       nearest_configurations, table)
 from .free_joint import STEP, free_solutions
 
 #: Two axes closer than this [rad of direction, m of distance] are taken as parallel / meeting.
 GEOMETRY = 1e-9
 #: Family names by code.
 FAMILIES = {WRIST_PARALLEL: "spherical wrist, axes 2 ∥ 3", WRIST_CROSSING: "spherical wrist, axes 1 and 2 meet",
-            THREE_PARALLEL: "axes 2 ∥ 3 ∥ 4, axes 5 and 6 meet"}
+            THREE_PARALLEL: "axes 2 ∥ 3 ∥ 4, axes 5 and 6 meet",
+            FIVE_PARALLEL: "five joints, axes 2 ∥ 3 ∥ 4 (the orientations the arm can take)"}
 
 
 @dataclass(frozen=True)
@@ -54,6 +56,9 @@ class ClosedForm:
     tables: tuple[np.ndarray, np.ndarray] = field(default=(np.zeros(0), np.zeros(0)), repr=False)
     #: a 7R chain's searched joint (:mod:`~framework.solvers.analytic.free_joint`), empty for a 6R chain
     free: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: the first of the six slots that is a joint (1 for a five-joint chain: slot 0 holds none, and its coordinate
+    #: repeats slot 1's, written first)
+    first: int = 0
 
     @property
     def exists(self) -> bool:
@@ -110,6 +115,31 @@ def form_of(frame: str, H: np.ndarray, P: np.ndarray, M: np.ndarray, coordinates
                    for lo, hi in ((lower, upper), (np.full(6, -np.pi), np.full(6, np.pi))))
     family = FAMILIES[code] + ("" if tool is None else " (read from the tool back)")
     return ClosedForm(frame, family, "", coordinates, code, signs, H, P, centre, M, Minv, lower, upper, tables)
+
+
+def five_joints(frame: str, H: np.ndarray, P: np.ndarray, M: np.ndarray, coordinates: np.ndarray,
+                lower_all: np.ndarray, upper_all: np.ndarray):
+    """The closed form of a 5R chain (axes 2 ∥ 3 ∥ 4, :data:`~.families.FIVE_PARALLEL`) held in slots 1-5 of the
+    six, slot 0 a joint fixed at 0; or a form saying there is none."""
+    H, signs = _oriented(H)
+
+    def parallel(a: int, b: int) -> bool:
+        return bool(np.linalg.norm(np.cross(H[a], H[b])) < GEOMETRY)
+
+    if not (parallel(1, 2) and parallel(2, 3)) or parallel(0, 1) or parallel(4, 1):
+        return ClosedForm(frame, None, "a 5-joint chain, but not with axes 2 ∥ 3 ∥ 4 (the family solved in closed "
+                                       "form)", coordinates)
+    coordinates = np.concatenate([coordinates[:1], coordinates]).astype(np.int64)
+    H, P, signs = np.vstack([np.zeros(3), H]), np.vstack([P[:1], P]), np.concatenate([[1.0], signs])
+    limits = lower_all[coordinates], upper_all[coordinates]
+    lower, upper = np.where(signs > 0, limits[0], -limits[1]), np.where(signs > 0, limits[1], -limits[0])
+    lower[0] = upper[0] = 0.0
+    Minv = np.linalg.inv(M)
+    wide = np.concatenate([[0.0], np.full(5, np.pi)])
+    tables = (table(H, P, np.zeros(3), M, Minv, lower, upper, signs),
+              table(H, P, np.zeros(3), M, Minv, -wide, wide, signs))
+    return ClosedForm(frame, FAMILIES[FIVE_PARALLEL], "", coordinates, FIVE_PARALLEL, signs, H, P, np.zeros(3), M,
+                      Minv, lower, upper, tables, first=1)
 
 
 def with_free_joint(frame: str, H: np.ndarray, P: np.ndarray, M: np.ndarray, coordinates: np.ndarray,

@@ -21,7 +21,7 @@ from ...errors import TaskError
 from ...model.joints import JointKind
 from ...model.robot import Robot
 from .families import MOST, nearest_solutions
-from .forms import ClosedForm, form_of, with_free_joint
+from .forms import ClosedForm, five_joints, form_of, with_free_joint
 from .free_joint import STEP
 
 
@@ -74,7 +74,8 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
     else:
         reason = ("every solution of the pose is outside the joint limits"
                   if len(form.solutions(packed, x_ref, tolerance, limits=False)) else
-                  "the pose is beyond the arm's reach (no exact solution)")
+                  "the pose is beyond the arm's reach (no exact solution" +
+                  ("; a five-joint arm takes only some orientations at a point)" if form.first else ")"))
     return AnalyticSolutions(X, form.family, reason)
 
 
@@ -83,10 +84,10 @@ class AnalyticBatch:
     """The solutions of a batch of poses, each once: as its 2π copy within the limits nearest the reference.
 
     Attributes:
-        chain: ``(B, 8, 6)`` the chain's coordinates of each pose's solutions, nearest to the reference first (rows
+        chain: ``(B, 8, k)`` the chain's ``k`` coordinates of each pose's solutions, nearest to the reference first (rows
             past ``counts[b]`` are NaN).
         counts: ``(B,)`` how many each pose has (0: beyond reach, or every one outside the limits).
-        coordinates: ``(6,)`` the chain's coordinates in the robot's joint vector.
+        coordinates: ``(k,)`` the chain's coordinates in the robot's joint vector.
         reference: ``(n,)`` the reference configuration (the joints off the chain keep its values).
     """
 
@@ -137,7 +138,7 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
                           counts[a:b])
 
     in_chunks(work, len(packed), workers=workers)
-    return AnalyticBatch(chain, counts, form.coordinates, x_ref)
+    return AnalyticBatch(chain[:, :, form.first:], counts, form.coordinates[form.first:], x_ref)
 
 
 def _reference(robot: Robot, reference) -> np.ndarray:
@@ -159,9 +160,9 @@ def _detect(robot: Robot, frame: str) -> ClosedForm:
     if any(j.kind not in (JointKind.REVOLUTE, JointKind.CONTINUOUS) for j in chain):
         return ClosedForm(frame, None, "its chain holds joints other than revolute ones: "
                                        f"{[j.name for j in chain if j.kind not in (JointKind.REVOLUTE, JointKind.CONTINUOUS)]}")
-    if len(chain) not in (6, 7):
-        return ClosedForm(frame, None, f"its chain has {len(chain)} joints, not 6 (or 7, one searched; lock the "
-                                       "extra ones, load_robot(..., locked={...}))")
+    if len(chain) not in (5, 6, 7):
+        return ClosedForm(frame, None, f"its chain has {len(chain)} joints, not 6 (or 5, or 7 with one searched; "
+                                       "lock the extra ones, load_robot(..., locked={...}))")
     data = model.createData()
     pin.framesForwardKinematics(model, data, robot.to_pinocchio(np.zeros(robot.n)))
     H = np.array([data.oMi[j.pin_id].rotation @ j.axis for j in chain])
@@ -170,6 +171,8 @@ def _detect(robot: Robot, frame: str) -> ClosedForm:
     coordinates = np.array([j.index for j in chain], dtype=np.int64)
     if len(chain) == 6:
         return form_of(frame, H, P, M, coordinates, robot.lower, robot.upper)
+    if len(chain) == 5:
+        return five_joints(frame, H, P, M, coordinates, robot.lower, robot.upper)
     return with_free_joint(frame, H, P, M, coordinates, robot.lower, robot.upper, [j.name for j in chain])
 
 
