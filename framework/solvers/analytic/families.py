@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...compiled.native import compiled, internal
-from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp2, sp3, sp4,
-                          sub, times)
+from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp1_cs, sp2, sp3,
+                          sp3_cs, sp4, sp4_cs, sub, times)
 
 WRIST_PARALLEL, WRIST_CROSSING, THREE_PARALLEL, FIVE_PARALLEL = 1, 2, 3, 4
 #: Solutions of one pose before 2π copies: at most 8.
@@ -55,20 +55,25 @@ def _unit_across(a, b):
 
 
 @internal
-def _wrist(H, RG, q1, cs1, q2, q3, reference, out, n):
+def _wrist(H, RG, q1, cs1, q2, cs2, q3, cs3, reference, out, n):
     """Append to ``out[n:]`` the solutions ``(q1, q2, q3, q4, q5, q6)`` of the wrist rotation ``R123ᵀ R_G``: q4, q5
-    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count (``cs1``: the cosine
-    and sine of ``-q1``)."""
+    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count (``csN``: the
+    cosine and sine of ``qN``)."""
     h1, h2, h3, h4, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 3), row(H, 4), row(H, 5)
-    c2, s2, c3, s3 = np.cos(q2), -np.sin(q2), np.cos(q3), -np.sin(q3)
-    target = rotate_cs(h3, c3, s3, rotate_cs(h2, c2, s2, rotate_cs(h1, cs1[0], cs1[1], _of(RG, h6))))
-    count, a1, a2, b1, b2 = sp2(h6, target, h4, h5, reference[3], reference[4])
+
+    def undo(v):  # R123ᵀ v
+        return rotate_cs(h3, cs3[0], -cs3[1], rotate_cs(h2, cs2[0], -cs2[1], rotate_cs(h1, cs1[0], -cs1[1], v)))
+
+    target = undo(_of(RG, h6))
+    # sp2 (h6 -> target by rot(h4, t4) rot(h5, t5)): rot(h4, -t4) target at h6's height along h5, then t5
+    count, ta, ca, sa, tb, cb, sb = sp4_cs(h5, target, h4, dot(h5, h6), -reference[3])
     across = _unit_across(h6, h4) if norm(cross(h6, h4)) > 1e-6 else _unit_across(h6, h5)
-    seen = rotate_cs(h3, c3, s3, rotate_cs(h2, c2, s2, rotate_cs(h1, cs1[0], cs1[1], _of(RG, across))))
+    seen = undo(_of(RG, across))
     for j in range(branches(count)):
-        t4, t5 = (a1, a2) if j == 0 else (b1, b2)
-        t6 = sp1(across, rotate(h5, -t5, rotate(h4, -t4, seen)), h6, reference[5])
-        out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4], out[n, 5] = q1, q2, q3, t4, t5, t6
+        t, c4, s4 = (ta, ca, sa) if j == 0 else (tb, cb, sb)  # rot(h4, -t4) is rot(h4, t): t4 = -t
+        t5, c5, s5 = sp1_cs(h6, rotate_cs(h4, c4, s4, target), h5, reference[4])
+        t6 = sp1(across, rotate_cs(h5, c5, -s5, rotate_cs(h4, c4, s4, seen)), h6, reference[5])
+        out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4], out[n, 5] = q1, q2, q3, -t, t5, t6
         n += 1
     return n
 
@@ -81,26 +86,26 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
     w = add(_of(RG, c), tG)
     n = 0
     if code == WRIST_PARALLEL:
-        count1, u, v = sp4(h2, sub(w, p1), h1, dot(h2, sub(c, p1)), -reference[0])
+        count1, ua, cua, sua, ub, cub, sub_ = sp4_cs(h2, sub(w, p1), h1, dot(h2, sub(c, p1)), -reference[0])
         for i in range(branches(count1)):
-            q1 = -u if i == 0 else -v
-            cs1 = (np.cos(q1), -np.sin(q1))
-            w1 = add(rotate_cs(h1, cs1[0], cs1[1], sub(w, p1)), p1)
-            count3, a, b = sp3(sub(c, p3), sub(p2, p3), h3, norm(sub(w1, p2)), reference[2])
+            u, cu, su = (ua, cua, sua) if i == 0 else (ub, cub, sub_)  # q1 = -u
+            w1 = add(rotate_cs(h1, cu, su, sub(w, p1)), p1)
+            count3, a, ca, sa, b, cb, sb = sp3_cs(sub(c, p3), sub(p2, p3), h3, norm(sub(w1, p2)), reference[2])
             for j in range(branches(count3)):
-                q3 = a if j == 0 else b
-                y3 = _apply(h3, p3, q3, c)
-                q2 = sp1(sub(y3, p2), sub(w1, p2), h2, reference[1])
-                n = _wrist(H, RG, q1, cs1, q2, q3, reference, out, n)
+                q3, c3, s3 = (a, ca, sa) if j == 0 else (b, cb, sb)
+                y3 = add(rotate_cs(h3, c3, s3, sub(c, p3)), p3)
+                q2, c2, s2 = sp1_cs(sub(y3, p2), sub(w1, p2), h2, reference[1])
+                n = _wrist(H, RG, -u, (cu, -su), q2, (c2, s2), q3, (c3, s3), reference, out, n)
     else:  # WRIST_CROSSING: axes 1 and 2 meet at P[0] (the caller put the meeting point there)
-        count3, a, b = sp3(sub(c, p3), sub(p1, p3), h3, norm(sub(w, p1)), reference[2])
+        count3, a, ca, sa, b, cb, sb = sp3_cs(sub(c, p3), sub(p1, p3), h3, norm(sub(w, p1)), reference[2])
         for j in range(branches(count3)):
-            q3 = a if j == 0 else b
-            y3 = _apply(h3, p3, q3, c)
+            q3, c3, s3 = (a, ca, sa) if j == 0 else (b, cb, sb)
+            y3 = add(rotate_cs(h3, c3, s3, sub(c, p3)), p3)
             count12, s1, s2, t1, t2 = sp2(sub(y3, p1), sub(w, p1), h1, h2, reference[0], reference[1])
             for i in range(branches(count12)):
                 q1, q2 = (s1, s2) if i == 0 else (t1, t2)
-                n = _wrist(H, RG, q1, (np.cos(q1), -np.sin(q1)), q2, q3, reference, out, n)
+                n = _wrist(H, RG, q1, (np.cos(q1), np.sin(q1)), q2, (np.cos(q2), np.sin(q2)), q3, (c3, s3),
+                           reference, out, n)
     return n
 
 

@@ -11,6 +11,7 @@ base or from the tool back; a 7R chain with one joint searched.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,7 +21,7 @@ from ...costs.pose import pose_parameters
 from ...errors import TaskError
 from ...model.joints import JointKind
 from ...model.robot import Robot
-from .families import MOST, nearest_solutions
+from .families import MOST, exact_solutions, nearest_solutions
 from .forms import ClosedForm, five_joints, form_of, with_free_joint
 from .free_joint import STEP
 
@@ -63,9 +64,12 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
     form = closed_form(robot, frame)
     if not form.exists:
         raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
-    x_ref = robot.middle if reference is None else _reference(robot, reference)
+    x_ref = robot.derived(_middle) if reference is None else _reference(robot, reference)
     packed = pose_parameters(pose, lambda: f"pose of {frame!r}", quaternion)
-    X = form.solutions(packed, x_ref, tolerance)
+    if form.free.size:
+        X = form.solutions(packed, x_ref, tolerance)
+    else:  # the common case called straight (arrays of the compiled signature's types: fresh or owned here)
+        X = exact_solutions(form.code, form.tables[0], form.coordinates, packed, x_ref, float(tolerance))
     if len(X):
         return AnalyticSolutions(X, form.family)
     if form.free.size:
@@ -141,10 +145,15 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
     return AnalyticBatch(chain[:, :, form.first:], counts, form.coordinates[form.first:], x_ref)
 
 
+def _middle(robot: Robot) -> np.ndarray:
+    """A writable copy of the middle of the bounds, the default reference (made once per robot; never written)."""
+    return np.array(robot.middle, dtype=float)
+
+
 def _reference(robot: Robot, reference) -> np.ndarray:
-    """The reference configuration ``(n,)`` as a float array, checked."""
-    x = np.asarray(reference, dtype=float)
-    if x.shape != (robot.n,) or not np.isfinite(x).all():
+    """The reference configuration ``(n,)`` as a writable float array of its own, checked."""
+    x = np.array(reference, dtype=float)
+    if x.shape != (robot.n,) or not math.isfinite(x.dot(x)):  # (xᵀx: inf or NaN with any such entry; 0.3 µs)
         raise TaskError(f"reference must be {robot.n} finite joint coordinates of {robot.name}; got {reference!r}")
     return x
 

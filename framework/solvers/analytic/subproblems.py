@@ -153,6 +153,50 @@ def sp2(p, q, k1, k2, free1, free2):
 
 
 @internal(inline=True)
+def sp1_cs(p, q, k, free):
+    """:func:`sp1` with the angle's cosine and sine (from the same products: no trigonometry): ``(θ, cos, sin)``."""
+    a = sub(p, scale(dot(k, p), k))
+    b = sub(q, scale(dot(k, q), k))
+    c = dot(k, cross(a, b))
+    d = dot(a, b)
+    r = np.sqrt(c * c + d * d)
+    if r <= FREE * (1.0 + dot(a, a) + dot(b, b)):
+        return free, np.cos(free), np.sin(free)
+    return np.arctan2(c, d), d / r, c / r
+
+
+@internal(inline=True)
+def sp4_cs(h, p, k, d, free):
+    """:func:`sp4` with each angle's cosine and sine: ``(count, θa, cos θa, sin θa, θb, cos θb, sin θb)``."""
+    hk, kp = dot(h, k), dot(k, p)
+    a = dot(h, p) - hk * kp
+    b = dot(h, cross(k, p))
+    rest = d - hk * kp
+    r = np.sqrt(a * a + b * b)
+    size = 1.0 + norm(p) + abs(d)
+    if r <= FREE * size:
+        if abs(rest) <= 1e-9 * size:
+            cf, sf = np.cos(free), np.sin(free)
+            return 3, free, cf, sf, free, cf, sf
+        return 0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0
+    c = rest / r
+    if abs(c) > 1.0 + EDGE:
+        return 0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0
+    c = min(1.0, max(-1.0, c))
+    phi, delta = np.arctan2(b, a), np.arccos(c)
+    cp, sp, sd = a / r, b / r, np.sqrt(max(0.0, 1.0 - c * c))
+    count = 1 if delta == 0.0 else 2
+    return (count, phi + delta, cp * c - sp * sd, sp * c + cp * sd,
+            phi - delta, cp * c + sp * sd, sp * c - cp * sd)
+
+
+@internal(inline=True)
+def sp3_cs(p, q, k, d, free):
+    """:func:`sp3` with each angle's cosine and sine, as :func:`sp4_cs`."""
+    return sp4_cs(q, p, k, 0.5 * (dot(p, p) + dot(q, q) - d * d), free)
+
+
+@internal(inline=True)
 def branches(count):
     """How many solutions a subproblem's count gives to loop over (a free angle: one)."""
     return 2 if count == 2 else (0 if count == 0 else 1)
