@@ -70,22 +70,29 @@ def settles(problem) -> bool:
 
 
 def prepare(problem) -> None:
-    """Load the closed form's compiled code for the frames ``problem``'s task terms place, if they have one (before a
-    time budget starts: :meth:`~framework.solvers.ik.IKSolver.prepare`; once per robot and frame: a prepared solve
-    pays a lookup)."""
-    for _, term in problem.objective:
-        if term.is_task:
-            for frame in term.frames:
-                problem.robot.derived(_load, frame)
+    """Load the closed form's compiled code that ``problem``'s solve will call, if its task fixes a pose on a
+    closed-form arm (before a time budget starts: :meth:`~framework.solvers.ik.IKSolver.prepare`; once per robot,
+    frame and entry point — a pose alone needs only the nearest solutions, other terms every solution —: a prepared
+    solve pays a lookup)."""
+    task = pose_task(problem)
+    if task is not None:
+        problem.robot.derived(_load_nearest if settles(problem) else load_every, task.frame)
 
 
-def _load(robot, frame: str) -> bool:
-    """Call the closed form of ``frame`` once, if it has one that seeds (its compiled code loaded from the cache,
-    or compiled)."""
+def _load_nearest(robot, frame: str) -> bool:
+    """Call the closed form's nearest solutions of ``frame`` once (loaded from the cache, or compiled)."""
     form = closed_form(robot, frame)
-    if not form.exists or form.free.size:
-        return False
-    pose = np.concatenate([form.M[:3, 3], form.M[:3, :3].ravel()])
-    form.nearest(pose, robot.middle)
-    form.solutions(pose, robot.middle)
+    form.nearest(_home(form), robot.middle)
     return True
+
+
+def load_every(robot, frame: str) -> bool:
+    """Call the closed form's every solution of ``frame`` once (loaded from the cache, or compiled)."""
+    form = closed_form(robot, frame)
+    form.solutions(_home(form), robot.middle)
+    return True
+
+
+def _home(form: ClosedForm) -> np.ndarray:
+    """``(12,)`` the frame's pose at the zero configuration (a pose the arm reaches)."""
+    return np.concatenate([form.M[:3, 3], form.M[:3, :3].ravel()])

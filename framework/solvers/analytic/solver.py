@@ -16,7 +16,7 @@ from ...errors import SolverError
 from ..ik import IKSolver, Outcome, Request
 from ..multistart import start_configuration
 from ..registry import register_ik
-from .seeding import TIE, pose_task, prepare
+from .seeding import TIE, load_every, pose_task
 
 
 @register_ik("closed_form")
@@ -27,8 +27,10 @@ class ClosedFormSolver(IKSolver):
     reference = "Paden 1985 and Kahan (subproblems); Pieper 1968 (spherical wrist); IKFast (Diankov 2010)"
 
     def prepare(self, problem) -> None:
-        """The closed form's compiled code (:func:`~.seeding.prepare`)."""
-        prepare(problem)
+        """The closed form's compiled code (every solution: the least costly is chosen among them)."""
+        task = pose_task(problem)
+        if task is not None:
+            problem.robot.derived(load_every, task.frame)
 
     def solve(self, problem, request: Request) -> Outcome:
         task = pose_task(problem)
