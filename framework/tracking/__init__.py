@@ -24,18 +24,20 @@ that starts from the previous solution (``hybrid``, ``multistart_lm``) runs the 
 in compiled stretches (:mod:`~framework.tracking.chain`), with the answers one solve per waypoint gives.
 
 Paths as data: :mod:`~framework.tracking.trajectory`. The papers' Jacobian baselines along a path:
-:func:`jacobian_track`, :func:`relative_jacobian_track` (:mod:`~framework.tracking.jacobian_paths`).
+:func:`jacobian_track`, :func:`relative_jacobian_track` (:mod:`~framework.tracking.jacobian_paths`). One control
+tick at a time, within joint velocity and acceleration limits: :class:`Servo` (:mod:`~framework.tracking.servo`).
 """
 
 from .jacobian_paths import jacobian_track, relative_jacobian_track
 from .loop import continued, track
 from .metrics import Smoothness, TrackingResult, joint_steps, waypoint_errors
 from .progress import Progress
+from .servo import Servo, ServoStep, velocity_limits
 from .task import (CONTINUED_SIGMA0, COORDINATIONS, FIRST_GLOBAL_ITERATIONS, FIRST_SIGMA0, TASK_SPACE_RATIO,
                    TaskBuilder, TrackingCallback, TrackingTask)
 from .warm import PREDICTOR, predictor, task_covariance
 
 __all__ = ["CONTINUED_SIGMA0", "COORDINATIONS", "FIRST_GLOBAL_ITERATIONS", "FIRST_SIGMA0", "PREDICTOR", "Progress",
-           "Smoothness", "TASK_SPACE_RATIO", "TaskBuilder", "TrackingCallback", "TrackingResult", "TrackingTask",
+           "Servo", "ServoStep", "Smoothness", "TASK_SPACE_RATIO", "TaskBuilder", "TrackingCallback", "TrackingResult", "TrackingTask",
            "continued", "jacobian_track", "joint_steps", "predictor", "relative_jacobian_track", "task_covariance", "track",
-           "waypoint_errors"]
+           "velocity_limits", "waypoint_errors"]
