@@ -12,7 +12,8 @@ import pytest
 
 import framework as fw
 from framework.errors import TaskError
-from framework.tracking.servo import Servo, velocity_limits
+from framework.tracking.servo import Servo
+from framework.tracking.timing import velocity_limits
 from tests.conftest import example_robot_data_dir
 
 FRAME = "panda_hand_tcp"

@@ -169,6 +169,9 @@ def _track_cases(args, task, cases, settings, solver, solve_settings, recorder, 
             initial=case.initial,
             warm_start=settings.get("warm_start", True),
             predict=settings.get("predict"),
+            velocity_scale=settings.get("velocity_scale"),
+            acceleration=settings.get("acceleration"),
+            retime=settings.get("retime", False),
             bounds=settings.get("bounds", "resample"),
             priorities=task.priorities,
             progress=False if args.no_progress else None,
@@ -191,7 +194,8 @@ def tracking_table(task, results: list, solver: str, seed: int, tolerance: float
     rows = {label: [] for label in (
         "waypoints", "position error, mean [m]", "position error, max [m]", "orientation error, mean",
         "orientation error, max", "motion error, mean", "motion error, max", "max joint step", "mean joint step",
-        "worst step at waypoint", f"within tolerance {tolerance:g}", "evaluations", "time (s)")}
+        "worst step at waypoint", f"within tolerance {tolerance:g}", "held back by joint limits", "path duration (s)",
+        "evaluations", "time (s)")}
     for case, result in results:
         smooth = result.smoothness(task.robot) if len(result) else None
         oriented = case.trajectory.has_orientation
@@ -205,6 +209,8 @@ def tracking_table(task, results: list, solver: str, seed: int, tolerance: float
             f"{smooth.mean_step['all']:.4f}" if smooth else "-",
             str(smooth.worst_point["all"]) if smooth else "-",
             ("" if result.all_success else "[red]") + f"{int(result.success.sum())}/{case.trajectory.K}",
+            str(int(result.lagging.sum())),
+            f"{result.trajectory.times[-1] - result.trajectory.times[0]:.3f}" if result.trajectory.is_timed else "-",
             str(int(result.evaluations.sum())),
             f"{result.wall_time:.2f}",
         ]

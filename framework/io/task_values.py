@@ -139,7 +139,7 @@ def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int
     missing = required - set(spec)
     if missing:
         raise TaskError(f"{where} ({kind}) needs {sorted(missing)}")
-    unknown = set(spec) - required - optional - {"type", "name", "orientation", "quaternion"}
+    unknown = set(spec) - required - optional - {"type", "name", "orientation", "quaternion", "rate", "duration"}
     if unknown:
         raise TaskError(f"{where} ({kind}): unknown keys {sorted(unknown)}; known: {sorted(required | optional)}")
 
@@ -185,6 +185,11 @@ def trajectory_from_table(spec: Any, variables: Mapping, path: Path, points: int
     if "orientation" in spec:
         order = str(spec["quaternion"]) if "quaternion" in spec else None
         trajectory = trajectory.with_orientation(rotation_from(value("orientation"), f"{where} orientation", order))
+    if "rate" in spec or "duration" in spec:  # a timed path: waypoints at a rate [Hz], or spread over a duration [s]
+        if "rate" in spec and "duration" in spec:
+            raise TaskError(f"{where}: give rate [Hz] or duration [s], not both")
+        timing = {key: float(value(key)) for key in ("rate", "duration") if key in spec}
+        trajectory = trajectory.timed(**timing)
     return trajectory
 
 

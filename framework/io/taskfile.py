@@ -67,7 +67,10 @@ previous waypoint's solution, and ``[previous]`` is the configuration before the
 
 A case may carry its own ``trajectory`` table (``[cases.trajectory]``), which replaces the top-level one.
 ``[solver]`` also takes ``warm_start`` (default true) and ``predict`` (Jacobian predictor; default: hybrid only);
-``max_iterations`` is the budget of each waypoint's solve.
+``max_iterations`` is the budget of each waypoint's solve. A timed path (``[trajectory] rate = 100`` [Hz] or
+``duration = 5`` [s]) may be tracked within the joint limits: ``[solver] velocity_scale = 0.5`` (the URDF's velocity
+limits times 0.5) and ``acceleration = 10`` [rad/s²] hold each waypoint to what they allow (those held back lag, and
+the result says so), ``retime = true`` instead gives the path the fastest times that keep them.
 """
 
 from __future__ import annotations
@@ -103,7 +106,8 @@ TABLES = {"task", "solver", "previous", "terms", "cases", "trajectory", "bench",
 #: ``[solver]`` keys and the kind of their values.
 SOLVER_KEYS = {"name": "text", "population": "integer", "max_iterations": "integer", "tolerance": "number",
                "seed": "integer", "bounds": "text", "options": "table", "stop_at_tolerance": "bool",
-               "warm_start": "bool", "predict": "bool"}
+               "warm_start": "bool", "predict": "bool", "velocity_scale": "number", "acceleration": "number",
+               "retime": "bool"}
 #: Variables a tracking task defines at every waypoint.
 WAYPOINT_VARIABLES = ("t", "R", "k")
 @dataclass(frozen=True)

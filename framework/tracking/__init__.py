@@ -32,12 +32,13 @@ from .jacobian_paths import jacobian_track, relative_jacobian_track
 from .loop import continued, track
 from .metrics import Smoothness, TrackingResult, joint_steps, waypoint_errors
 from .progress import Progress
-from .servo import Servo, ServoStep, velocity_limits
+from .servo import Servo, ServoStep
+from .timing import JointLimits, joint_limits, retimed, velocity_limits
 from .task import (CONTINUED_SIGMA0, COORDINATIONS, FIRST_GLOBAL_ITERATIONS, FIRST_SIGMA0, TASK_SPACE_RATIO,
                    TaskBuilder, TrackingCallback, TrackingTask)
 from .warm import PREDICTOR, predictor, task_covariance
 
-__all__ = ["CONTINUED_SIGMA0", "COORDINATIONS", "FIRST_GLOBAL_ITERATIONS", "FIRST_SIGMA0", "PREDICTOR", "Progress",
+__all__ = ["CONTINUED_SIGMA0", "COORDINATIONS", "FIRST_GLOBAL_ITERATIONS", "FIRST_SIGMA0", "JointLimits", "PREDICTOR", "Progress",
            "Servo", "ServoStep", "Smoothness", "TASK_SPACE_RATIO", "TaskBuilder", "TrackingCallback", "TrackingResult", "TrackingTask",
-           "continued", "jacobian_track", "joint_steps", "predictor", "relative_jacobian_track", "task_covariance", "track",
+           "continued", "jacobian_track", "joint_limits", "joint_steps", "predictor", "relative_jacobian_track", "retimed", "task_covariance", "track",
            "velocity_limits", "waypoint_errors"]

@@ -14,12 +14,13 @@ from ..errors import TaskError
 from ..costs.problem import Problem
 from ..model.robot import Robot
 from ..solvers.settings import DEFAULTS
-from ..solvers.solve import IKResult, check_settings, make_request, solve
-from ..solvers import IKSolver, ik_solver
+from ..solvers.solve import IKResult, check_settings, make_request, result_of, solve
+from ..solvers import IKSolver, Outcome, ik_solver
 from .trajectory import Trajectory
 from .chain import Chain
 from .metrics import TrackingResult, path_reason, waypoint_errors
 from .progress import Progress
+from .timing import JointLimits, command, joint_limits, retimed, segment_intervals
 from .task import (
     CONTINUED_SIGMA0,
     FIRST_GLOBAL_ITERATIONS,
@@ -54,6 +55,9 @@ def track(
     priorities: bool = True,
     progress: bool | None = None,
     callback: TrackingCallback | None = None,
+    velocity_scale: float | None = None,
+    acceleration: float | np.ndarray | None = None,
+    retime: bool = False,
 ) -> TrackingResult:
     """Track ``trajectory`` with ``robot``: one :func:`~framework.solve` per waypoint.
 
@@ -82,6 +86,11 @@ def track(
         bounds, priorities: as :class:`~framework.costs.problem.Problem`.
         progress: show a progress bar (``None``: only on a terminal).
         callback: ``callback(k, ik_result)`` after each waypoint; returning True stops early.
+        velocity_scale, acceleration: joint velocity limits (the robot file's, times ``velocity_scale``) and
+            acceleration limits along a timed path (:meth:`Trajectory.timed`): each waypoint at most what they allow
+            from the previous one (:func:`~.timing.command`); one held short lags (``result.lagging``, the reason).
+        retime: instead, track freely and give the path the fastest times that keep them (:func:`~.timing.retimed`,
+            in ``result.trajectory``): every waypoint met, the limits kept.
 
     A solver with a global phase (the hybrid) runs :data:`FIRST_GLOBAL_ITERATIONS` generations of it at the first
     waypoint unless ``options`` set them.
@@ -106,12 +115,13 @@ def track(
         options["closed_form"] = False
     method = ik_solver(solver, options)  # checks the name and the options once
     predict = method.carries_distribution if predict is None else bool(predict)
+    limits = _path_limits(robot, trajectory, velocity_scale, acceleration, retime)
     check_settings(seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance, time_budget=time_budget,
                    max_iterations=max_iterations, population=population)  # every setting checked once, here
     run = _Waypoints(robot, trajectory, task, method, options, bounds, priorities, warm_start, float(warm_spread),
                      predict, dict(seed=seed, tolerance=tolerance, angle_tolerance=angle_tolerance,
                                    time_budget=time_budget, max_iterations=max_iterations, population=population,
-                                   stop_at_tolerance=stop_at_tolerance))
+                                   stop_at_tolerance=stop_at_tolerance), None if retime else limits)
     start, cpu_start = time.perf_counter(), time.process_time()
     rows, stop_reason = run.all(q0, seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed),
                                 progress, callback)
@@ -119,9 +129,11 @@ def track(
                 "warm_start": warm_start, "warm_spread": warm_spread, "predict": predict, "tolerance": tolerance,
                 "angle_tolerance": angle_tolerance, "time_budget": time_budget,
                 "stop_at_tolerance": stop_at_tolerance, "bounds": bounds, "priorities": priorities, "options": options,
-                "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task))}
+                "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task)),
+                "velocity_scale": velocity_scale, "acceleration": acceleration, "retime": retime}
+    trajectory = _retimed(trajectory, q0, rows, limits) if retime else trajectory
     times = (time.perf_counter() - start, time.process_time() - cpu_start)
-    return _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance)
+    return _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance, run.lagging)
 
 
 class _Waypoints:
@@ -129,7 +141,8 @@ class _Waypoints:
     warm start made), or a stretch of them answered by the chained engine (:class:`~framework.tracking.chain.Chain`)."""
 
     def __init__(self, robot: Robot, trajectory: Trajectory, task, method: IKSolver, options: dict, bounds: str,
-                 priorities: bool, warm_start: bool, warm_spread: float, predict: bool, asked: dict) -> None:
+                 priorities: bool, warm_start: bool, warm_spread: float, predict: bool, asked: dict,
+                 limits: JointLimits | None = None) -> None:
         self.robot, self.trajectory, self.method, self.options = robot, trajectory, method, options
         self.builder = _builder(robot, task)
         self.spec = task if isinstance(task, TrackingTask) else (TrackingTask() if task is None else None)
@@ -139,7 +152,11 @@ class _Waypoints:
         # alone: stretches of waypoints run compiled (chain.py); a time budget is each waypoint's own
         self.planner = getattr(self.spec if task is None else task, "path_parameters", None)
         self.chained = self.planner is not None and warm_start and not predict and method.uses_jacobians \
-            and asked["time_budget"] is None
+            and asked["time_budget"] is None and limits is None  # (limits act between waypoints: one at a time)
+        self.limits, self.lagging = limits, []
+        if limits is not None:
+            self.intervals = segment_intervals(trajectory.times)
+            self.velocity, self.goal = np.zeros(robot.n), None
         self.problem: Problem | None = None
         self.chain: Chain | None = None
         self.state: dict[str, Any] = {}  # the previous solve's search distribution, for solvers that continue it
@@ -160,6 +177,8 @@ class _Waypoints:
                         if result.stop_reason == "interrupted":
                             stop_reason = "interrupted"
                             break
+                        if self.limits is not None:
+                            result = self.limited(k, previous, result)
                         results, missed = [result], False
                     kept = 0
                     try:
@@ -182,6 +201,23 @@ class _Waypoints:
             except KeyboardInterrupt:
                 stop_reason = "interrupted"
         return rows, stop_reason
+
+    def limited(self, k: int, previous: np.ndarray, result: IKResult) -> IKResult:
+        """Waypoint ``k``'s answer within the joint limits from ``previous`` (:func:`~.timing.command`): itself, or
+        the configuration the limits allow towards it, evaluated (the waypoint then lags)."""
+        goal = result.configuration
+        q, velocity = np.empty(self.robot.n), np.empty(self.robot.n)
+        held = command(previous, self.velocity, goal, goal if self.goal is None else self.goal,
+                       self.limits.velocity, self.limits.acceleration, self.robot.lower, self.robot.upper,
+                       float(self.intervals[k]), q, velocity)
+        self.velocity, self.goal = velocity, goal
+        self.lagging.append(bool(held.any()))
+        if not held.any():
+            return result
+        request = make_request(self.problem, tolerance=self.asked["tolerance"],
+                               angle_tolerance=self.asked["angle_tolerance"])
+        outcome = Outcome(q, "velocity_limits", result.iterations, result.evaluations, None, result.settings)
+        return result_of(self.problem, outcome, self.method.name, request, time.perf_counter() - result.wall_time)
 
     def solve(self, k: int, previous: np.ndarray, rng: np.random.Generator) -> IKResult:
         """Waypoint ``k`` solved by the solver from ``previous`` (the chain made from its problem the first time)."""
@@ -270,7 +306,26 @@ def _builder(robot: Robot, task: TrackingTask | TaskBuilder | None) -> TaskBuild
     return task
 
 
-def _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance) -> TrackingResult:
+def _retimed(trajectory: Trajectory, q0: np.ndarray, rows: list, limits: JointLimits) -> Trajectory:
+    """The tracked part of ``trajectory`` with the fastest times that keep ``limits`` along its solutions."""
+    if not rows:
+        return trajectory
+    Q = np.array([r.configuration for r, _ in rows])
+    return trajectory[: len(rows)].timed(times=retimed(trajectory.times[: len(rows)], q0, Q, limits))
+
+
+def _path_limits(robot: Robot, trajectory: Trajectory, velocity_scale, acceleration, retime: bool
+                 ) -> JointLimits | None:
+    """The joint limits a tracking run keeps (``None``: none asked); they need a timed path."""
+    if velocity_scale is None and acceleration is None and not retime:
+        return None
+    if not trajectory.is_timed:
+        raise TaskError(f"joint velocity or acceleration limits need a timed path: {trajectory.name!r} has no times "
+                        "(Trajectory.timed(rate=...) or duration=..., a task file's [trajectory] rate or duration)")
+    return joint_limits(robot, 1.0 if velocity_scale is None else velocity_scale, acceleration)
+
+
+def _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance, lagging) -> TrackingResult:
     results = [r for r, _ in rows]
     names = list(results[0].terms) if results else []
     terms = {name: np.array([r.terms.get(name, np.nan) for r in results]) for name in names}
@@ -296,7 +351,8 @@ def _result(trajectory, q0, rows, stop_reason, solver, settings, times, toleranc
         settings=settings,
         wall_time=times[0],
         cpu_time=times[1],
-        reason=path_reason(results, trajectory.K, stop_reason),
+        reason=path_reason(results, trajectory.K, stop_reason, lagging),
+        lagging=np.array(lagging if lagging else [False] * len(results), dtype=bool),
     )
 
 

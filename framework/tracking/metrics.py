@@ -77,7 +77,10 @@ class TrackingResult:
         solver, settings: what ran, with every setting.
         wall_time, cpu_time: seconds for the whole run (wall clock, and CPU time of this process).
         reason: what went wrong, in one line: the waypoints missed (and the first one's
-            :attr:`~framework.solvers.solve.IKResult.reason`), those not solved; ``""`` when every waypoint was.
+            :attr:`~framework.solvers.solve.IKResult.reason`), those the joint limits held back, those not solved;
+            ``""`` when every waypoint was.
+        lagging: ``(k,)`` the waypoints whose configuration the joint velocity or acceleration limits held short of
+            their solution (``track(..., velocity_scale=...)`` on a timed path).
     """
 
     trajectory: Trajectory
@@ -99,6 +102,7 @@ class TrackingResult:
     wall_time: float = 0.0
     cpu_time: float = 0.0
     reason: str = ""
+    lagging: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool), repr=False)
 
     def __len__(self) -> int:
         return self.configurations.shape[0]
@@ -165,13 +169,18 @@ def waypoint_errors(result: IKResult, kinds: Sequence[str]) -> tuple[float, floa
     return totals["position"], totals["orientation"], totals["motion"]
 
 
-def path_reason(results: Sequence, K: int, stop_reason: str) -> str:
-    """:attr:`TrackingResult.reason` of the waypoint results ``results`` (``IKResult``) of a path of ``K``."""
+def path_reason(results: Sequence, K: int, stop_reason: str, lagging: Sequence[bool] = ()) -> str:
+    """:attr:`TrackingResult.reason` of the waypoint results ``results`` (``IKResult``) of a path of ``K``
+    (``lagging``: those the joint limits held back)."""
     missed = [k for k, r in enumerate(results) if not r.success]
     parts = []
     if missed:
         parts.append(f"{len(missed)} of {len(results)} waypoints missed (k = {spans(missed)}); waypoint {missed[0]}: "
                      f"{results[missed[0]].reason}")
+    held = [k for k, lag in enumerate(lagging) if lag]
+    if held:
+        parts.append(f"the joint velocity / acceleration limits held {len(held)} waypoints back (k = {spans(held)}): "
+                     "the path is faster than the robot may move; retime=True (or a slower timed path) meets it")
     if len(results) < K:
         parts.append(f"stopped ({stop_reason}) after {len(results)} of {K} waypoints")
     return "; ".join(parts)

@@ -10,7 +10,8 @@
 2. **How far this tick**: the step towards that goal, every joint scaled by one factor (the joint-space direction
    kept) so that no joint exceeds its velocity limit (the URDF's ``<limit velocity>``, times ``velocity_scale``) nor,
    with ``acceleration``, the speed from which it can still meet the goal without overshooting (the goal's own
-   speed plus ``√(2 a d)``); then each joint's change of velocity clamped to ``± a dt``. The limits hold by construction (:func:`command`, compiled).
+   speed plus ``√(2 a d)``); then each joint's change of velocity clamped to ``± a dt``. The limits hold by construction
+   (:func:`~framework.tracking.timing.command`, compiled).
 
 A step says whether the goal is met, which joints a limit held back, and why the task is missed: held back by the
 limits (the target moves faster than the robot may), or the goal itself misses it (beyond reach, a singularity).
@@ -22,13 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..compiled.native import compiled
 from ..costs import Objective, Pose, Term
 from ..costs.problem import Problem
 from ..engine import LocalSettings, solve_local
 from ..engine.draws import stream
 from ..errors import TaskError
 from ..model.robot import Robot
+from .timing import command, joint_limits
 
 
 @dataclass(frozen=True)
@@ -76,14 +77,9 @@ class Servo:
     def __init__(self, robot: Robot, objective: Term | Objective, *, q0: np.ndarray | None = None,
                  velocity_scale: float = 1.0, acceleration: float | np.ndarray | None = None,
                  tolerance: float = 1e-6, iterations: int = 20):
-        if isinstance(velocity_scale, bool) or not (isinstance(velocity_scale, (int, float))
-                                                     and 0 < velocity_scale < np.inf):
-            raise TaskError(f"velocity_scale must be a factor > 0; got {velocity_scale!r}")
         self.robot = robot
         self.problem = Problem(robot, objective)
-        self.velocity_limits = velocity_limits(robot) * float(velocity_scale)
-        self.acceleration_limits = (np.full(robot.n, np.inf) if acceleration is None
-                                    else _positive(acceleration, robot.n, "acceleration"))
+        self.velocity_limits, self.acceleration_limits = joint_limits(robot, velocity_scale, acceleration)
         self.q = robot.middle.copy() if q0 is None else robot.check_population(q0, "q0")[0].copy()
         self.velocity = np.zeros(robot.n)
         self.goal = self.q.copy()  # (the state's arrays are replaced each tick, never written)
@@ -126,53 +122,3 @@ class Servo:
             return "the goal misses the task (beyond reach, or a singularity): moving as near as the limits allow"
         names = ", ".join(self.robot.coordinate_names[i] for i in np.flatnonzero(held))
         return f"held back by the limits ({names}): the target moves faster than the robot may"
-
-
-@compiled
-def command(q, velocity, goal, last_goal, v_max, a_max, lower, upper, dt, q_next, v_next):
-    """The next configuration ``q_next`` and velocity ``v_next`` ``(n,)`` towards ``goal`` (moving from
-    ``last_goal`` in ``dt``) from ``q`` moving at ``velocity``: the step scaled by one factor so that no joint exceeds
-    ``v_max`` nor the speed from which it still meets the goal without overshooting (the goal's own speed plus
-    ``√(2 a_max d)``), then each joint's change of velocity clamped to ``± a_max dt``, the result kept in
-    ``[lower, upper]``. Returns which joints a limit held short of the goal ``bool (n,)``."""
-    n = q.shape[0]
-    scale = 1.0
-    for i in range(n):
-        wanted = abs(goal[i] - q[i]) / dt
-        if wanted > 0.0:
-            cap = min(v_max[i], abs(goal[i] - last_goal[i]) / dt + np.sqrt(2.0 * a_max[i] * abs(goal[i] - q[i])))
-            scale = min(scale, cap / wanted)
-    held = np.zeros(n, dtype=np.bool_)
-    for i in range(n):
-        v = scale * (goal[i] - q[i]) / dt
-        change = a_max[i] * dt
-        v = min(velocity[i] + change, max(velocity[i] - change, v))
-        v = min(v_max[i], max(-v_max[i], v))
-        x = min(upper[i], max(lower[i], q[i] + v * dt))
-        v_next[i] = (x - q[i]) / dt
-        q_next[i] = x
-        held[i] = abs(x - goal[i]) > 1e-12
-    return held
-
-
-def velocity_limits(robot: Robot) -> np.ndarray:
-    """``(n,)`` each coordinate's velocity limit from the robot file [rad/s, m/s] (``inf`` where it gives none or
-    0)."""
-    limits = np.full(robot.n, np.inf)
-    given = np.asarray(robot.model.velocityLimit, dtype=float)
-    for joint in robot.joints:
-        for k, i in enumerate(joint.coordinates):
-            value = given[joint.idx_v + k] if joint.idx_v + k < given.size else 0.0
-            limits[i] = value if np.isfinite(value) and value > 0 else np.inf
-    return limits
-
-
-def _positive(value, n: int, what: str) -> np.ndarray:
-    """``(n,)`` limits from a number or ``n`` numbers, each > 0."""
-    try:
-        limits = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy()
-    except (TypeError, ValueError):
-        limits = None
-    if limits is None or not np.all(limits > 0):
-        raise TaskError(f"{what} limits must be numbers > 0 (one, or one per coordinate: {n}); got {value!r}")
-    return limits

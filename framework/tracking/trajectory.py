@@ -67,6 +67,8 @@ class Trajectory:
         positions: ``(K, 3)`` waypoint positions [m].
         rotations: ``(K, 3, 3)`` world-from-frame rotations of the waypoints, or ``None`` (position only).
         name: label for reports and plots.
+        times: ``(K,)`` when each waypoint is to be met [s], strictly increasing, or ``None`` (untimed: waypoints
+            only); :meth:`timed` gives a path times from a rate or a duration.
 
     Raises:
         TaskError: wrong shapes, NaN/inf, fewer than one waypoint, or matrices that are not rotations.
@@ -75,6 +77,7 @@ class Trajectory:
     positions: np.ndarray
     rotations: np.ndarray | None = None
     name: str = field(default="path", compare=False)
+    times: np.ndarray | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         P = np.array(self.positions, dtype=float)
@@ -85,6 +88,13 @@ class Trajectory:
         _check_finite(P, f"trajectory {self.name!r}: positions")
         P.flags.writeable = False
         object.__setattr__(self, "positions", P)
+        if self.times is not None:
+            t = np.array(self.times, dtype=float)
+            if t.shape != (P.shape[0],) or not np.isfinite(t).all() or (np.diff(t) <= 0).any():
+                raise TaskError(f"trajectory {self.name!r}: times must be {P.shape[0]} finite, strictly increasing "
+                                f"seconds (one per waypoint); got {np.asarray(self.times).tolist()}")
+            t.flags.writeable = False
+            object.__setattr__(self, "times", t)
         if self.rotations is None:
             return
         R = np.array(self.rotations, dtype=float)
@@ -117,6 +127,34 @@ class Trajectory:
     def has_orientation(self) -> bool:
         return self.rotations is not None
 
+    @property
+    def is_timed(self) -> bool:
+        return self.times is not None
+
+    def timed(self, *, rate: float | None = None, duration: float | None = None,
+              times: ArrayLike | None = None) -> Trajectory:
+        """The same waypoints met at ``rate`` [Hz] from ``t = 0``, spread evenly over ``duration`` [s], or at
+        ``times`` ``(K,)`` [s] (exactly one of them)."""
+        given = [v for v in (rate, duration, times) if v is not None]
+        if len(given) != 1:
+            raise TaskError("timed() takes exactly one of rate [Hz], duration [s] or times (K,) [s]")
+        if rate is not None:
+            if not (isinstance(rate, (int, float)) and 0 < rate < np.inf):
+                raise TaskError(f"rate must be a frequency > 0 [Hz]; got {rate!r}")
+            times = np.arange(self.K) / float(rate)
+        elif duration is not None:
+            if not (isinstance(duration, (int, float)) and 0 < duration < np.inf) or self.K < 2:
+                raise TaskError(f"duration must be > 0 [s] for a path of two or more waypoints; got {duration!r}")
+            times = np.linspace(0.0, float(duration), self.K)
+        return Trajectory(self.positions, self.rotations, self.name, times)
+
+    @property
+    def intervals(self) -> np.ndarray:
+        """``(K - 1,)`` seconds between consecutive waypoints (a timed path)."""
+        if self.times is None:
+            raise TaskError(f"trajectory {self.name!r} has no times: Trajectory.timed(rate=..., duration=...)")
+        return np.diff(self.times)
+
     def rotation(self, k: int) -> np.ndarray | None:
         """``(3, 3)`` rotation of waypoint ``k``, or ``None`` for a position-only trajectory."""
         return None if self.rotations is None else self.rotations[k]
@@ -126,7 +164,7 @@ class Trajectory:
         idx = [index] if isinstance(index, (int, np.integer)) else index
         P = self.positions[idx]
         R = None if self.rotations is None else self.rotations[idx]
-        return Trajectory(P, R, self.name)
+        return Trajectory(P, R, self.name, None if self.times is None else self.times[idx])
 
     @property
     def length(self) -> float:
@@ -141,7 +179,7 @@ class Trajectory:
     # ------------------------------------------------------------------ composition
     def offset(self, delta: ArrayLike) -> Trajectory:
         """The same path translated by ``delta`` ``(3,)`` [m] (world axes); orientations unchanged."""
-        return Trajectory(self.positions + point3(delta, "offset"), self.rotations, self.name)
+        return Trajectory(self.positions + point3(delta, "offset"), self.rotations, self.name, self.times)
 
     def transformed(
         self, rotation: np.ndarray | None = None, translation: ArrayLike = (0.0, 0.0, 0.0)
@@ -150,23 +188,25 @@ class Trajectory:
         R = np.eye(3) if rotation is None else _rotation(rotation, "rotation")
         P = self.positions @ R.T + point3(translation, "translation")
         rotations = None if self.rotations is None else np.einsum("ij,kjl->kil", R, self.rotations)
-        return Trajectory(P, rotations, self.name)
+        return Trajectory(P, rotations, self.name, self.times)
 
     def with_orientation(self, rotation: np.ndarray | None) -> Trajectory:
         """The same positions with orientation ``rotation`` (``(3, 3)`` for all waypoints or ``(K, 3, 3)``);
         ``None`` drops the orientation."""
-        return Trajectory(self.positions, rotation, self.name)
+        return Trajectory(self.positions, rotation, self.name, self.times)
 
     def reversed(self) -> Trajectory:
-        """The waypoints in reverse order."""
-        return self[::-1]
+        """The waypoints in reverse order (a timed path: the same intervals, in reverse)."""
+        times = None if self.times is None else self.times[-1] - self.times[::-1]
+        return Trajectory(self.positions[::-1], None if self.rotations is None else self.rotations[::-1], self.name,
+                          times)
 
     def then(self, *others: Trajectory) -> Trajectory:
         """This path followed by ``others`` (see :func:`concatenate`)."""
         return concatenate(self, *others, name=self.name)
 
     def renamed(self, name: str) -> Trajectory:
-        return Trajectory(self.positions, self.rotations, name)
+        return Trajectory(self.positions, self.rotations, name, self.times)
 
     # ------------------------------------------------------------------ files
     def to_array(self) -> np.ndarray:
@@ -302,8 +342,9 @@ def _rotation(value: np.ndarray, what: str) -> np.ndarray:
 def concatenate(*trajectories: Trajectory, name: str | None = None) -> Trajectory:
     """One trajectory through all waypoints of ``trajectories`` in order.
 
-    Either all have orientations or none. A waypoint repeated at a junction (the end of one piece equal to the
-    start of the next, within 1e-12 m) is kept once.
+    Either all have orientations or none; either all are timed or none (each timed piece then follows the last
+    one's end, its first interval kept before its first waypoint). A waypoint repeated at a junction (the end of one
+    piece equal to the start of the next, within 1e-12 m) is kept once (at the earlier time).
     """
     if not trajectories:
         raise TaskError("concatenate needs at least one trajectory")
@@ -312,13 +353,22 @@ def concatenate(*trajectories: Trajectory, name: str | None = None) -> Trajector
         raise TaskError(
             "cannot concatenate trajectories with and without orientation; use with_orientation()"
         )
+    timed = {t.is_timed for t in trajectories}
+    if len(timed) != 1:
+        raise TaskError("cannot concatenate timed and untimed trajectories; time them all (timed()) or none")
     P, R = [trajectories[0].positions], [trajectories[0].rotations]
+    T = [trajectories[0].times]
     for t in trajectories[1:]:
         start = 1 if np.linalg.norm(t.positions[0] - P[-1][-1]) < 1e-12 else 0
         P.append(t.positions[start:])
         R.append(None if t.rotations is None else t.rotations[start:])
+        if timed == {True}:
+            gap = t.times[1] - t.times[0] if t.K > 1 else 1.0
+            shift = T[-1][-1] - t.times[0] + (0.0 if start else gap)
+            T.append(t.times[start:] + shift)
     rotations = np.concatenate(R) if oriented == {True} else None
-    return Trajectory(np.concatenate(P), rotations, name or "+".join(t.name for t in trajectories))
+    times = np.concatenate(T) if timed == {True} else None
+    return Trajectory(np.concatenate(P), rotations, name or "+".join(t.name for t in trajectories), times)
 
 
 # ---------------------------------------------------------------------------------------------- shapes
