@@ -89,8 +89,7 @@ def track(
         velocity_scale, acceleration: joint velocity limits (the robot file's, times ``velocity_scale``) and
             acceleration limits along a timed path (:meth:`Trajectory.timed`): each waypoint at most what they allow
             from the previous one (:func:`~.timing.command`); one held short lags (``result.lagging``, the reason).
-        retime: instead, track freely and give the path the fastest times that keep them (:func:`~.timing.retimed`,
-            in ``result.trajectory``): every waypoint met, the limits kept.
+        retime: instead, track freely, then give the path the fastest times keeping them (``result.trajectory``).
 
     A solver with a global phase (the hybrid) runs :data:`FIRST_GLOBAL_ITERATIONS` generations of it at the first
     waypoint unless ``options`` set them.
@@ -129,11 +128,11 @@ def track(
                 "warm_start": warm_start, "warm_spread": warm_spread, "predict": predict, "tolerance": tolerance,
                 "angle_tolerance": angle_tolerance, "time_budget": time_budget,
                 "stop_at_tolerance": stop_at_tolerance, "bounds": bounds, "priorities": priorities, "options": options,
-                "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task)),
-                "velocity_scale": velocity_scale, "acceleration": acceleration, "retime": retime}
-    trajectory = _retimed(trajectory, q0, rows, limits) if retime else trajectory
+                "velocity_scale": velocity_scale, "acceleration": acceleration, "retime": retime,
+                "task": task if isinstance(task, TrackingTask) else getattr(task, "__name__", repr(task))}
     times = (time.perf_counter() - start, time.process_time() - cpu_start)
-    return _result(trajectory, q0, rows, stop_reason, solver, settings, times, tolerance, run.lagging)
+    return _result(_retimed(trajectory, q0, rows, limits) if retime else trajectory, q0, rows, stop_reason, solver,
+                   settings, times, tolerance, run.lagging)
 
 
 class _Waypoints:
