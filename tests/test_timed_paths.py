@@ -131,3 +131,25 @@ rotation = "R"
     path.write_text(text.replace("duration = 0.2", "duration = 0.2\nrate = 10"))
     assert main(["run", str(path), "--no-progress"]) == 2
 
+
+
+def test_a_recording_shows_the_joint_velocities_against_their_limits(puma_path, tmp_path):
+    """A limited run recorded: each coordinate's velocity series (from the recording, on the waypoint timeline) is
+    the configurations' differences over the path's intervals, and stays under the limit series beside it."""
+    from framework.io.recording import Recorder, read_recording
+
+    robot, path = puma_path
+    timed = path.timed(duration=0.4)
+    result = track(robot, timed, TrackingTask(frame="ee", orientation_weight=1.0, motion=0.01), initial=robot.middle,
+                   velocity_scale=0.5, progress=False)
+    file = tmp_path / "timed.rrd"
+    with Recorder(file, robot) as recorder:
+        slug = recorder.log_tracking(result, name="timed")
+    recording = read_recording(file)
+    V, _ = _motion(result.initial, result.configurations, timed.times)
+    for i, name in enumerate(robot.coordinate_names):
+        _, velocity = recording.scalars(f"/tracking/{slug}/joint_velocity/{name}", "waypoint")
+        _, limit = recording.scalars(f"/tracking/{slug}/joint_velocity_limit/{name}", "waypoint")
+        np.testing.assert_allclose(velocity, V[:, i], rtol=1e-6, atol=1e-9)
+        assert np.all(np.abs(velocity) <= limit * (1 + 1e-6))
+        np.testing.assert_allclose(limit, 0.5 * velocity_limits(robot)[i])

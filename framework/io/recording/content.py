@@ -73,6 +73,25 @@ def desired_paths(robot: Robot, tracking: TrackingResult, task: Any) -> dict[str
     return {frame: np.array(p) for frame, p in points.items() if len(p) == len(Q)}
 
 
+def joint_velocities(robot: Robot, tracking: TrackingResult) -> dict[str, np.ndarray]:
+    """A timed path's joint velocities against their limits, per waypoint: ``joint_velocity/<coordinate>``
+    [rad/s, m/s] (each segment's, :func:`~framework.tracking.timing.motion`), and ``joint_velocity_limit/<coordinate>``
+    (the URDF's, times the run's ``velocity_scale``), for the coordinates with a limit; none for an untimed path."""
+    from ...tracking.timing import motion, segment_intervals, velocity_limits
+
+    trajectory = tracking.trajectory
+    if not trajectory.is_timed or not len(tracking):
+        return {}
+    V, _ = motion(tracking.initial, tracking.configurations, segment_intervals(trajectory.times[: len(tracking)]))
+    limits = velocity_limits(robot) * (tracking.settings.get("velocity_scale") or 1.0)
+    series = {}
+    for i, name in enumerate(robot.coordinate_names):
+        series[f"joint_velocity/{name}"] = V[:, i]
+        if np.isfinite(limits[i]):
+            series[f"joint_velocity_limit/{name}"] = np.full(len(V), limits[i])
+    return series
+
+
 def reach_of(segments: np.ndarray) -> float:
     points = segments.reshape(-1, 3)
     return float(max(np.ptp(points, axis=0).max(), 0.2)) if points.size else 1.0

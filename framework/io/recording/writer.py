@@ -12,7 +12,7 @@ import numpy as np
 
 from ...errors import RecordingError
 from ...geometry.scene import Scene
-from .content import (OBSTACLE_COLOR, robot_markdown, SPHERE_COLOR, desired_paths, entity_name, mesh_bytes, reach_of, rgb255,
+from .content import (OBSTACLE_COLOR, robot_markdown, SPHERE_COLOR, desired_paths, entity_name, joint_velocities, mesh_bytes, reach_of, rgb255,
                       settings_markdown, target_points)
 from ...viz.drawing import (
     DESIRED_COLOR,
@@ -455,6 +455,7 @@ class Recorder:
             errors["orientation_error"] = tracking.orientation_error
         errors |= {"motion_error": tracking.motion_error, "task_error": tracking.task_error}
         errors |= {f"terms/{term}": values for term, values in tracking.terms.items()}
+        errors |= joint_velocities(self.robot, tracking)  # a timed path's joint velocities against their limits
         settings = {
             "trajectory": trajectory.name,
             "waypoints done": f"{len(Q)} of {trajectory.K}",
