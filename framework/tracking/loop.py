@@ -205,13 +205,13 @@ class _Waypoints:
         """Waypoint ``k``'s answer within the joint limits from ``previous`` (:func:`~.timing.command`): itself, or
         the configuration the limits allow towards it, evaluated (the waypoint then lags)."""
         goal = result.configuration
-        q, velocity = np.empty(self.robot.n), np.empty(self.robot.n)
-        held = command(previous, self.velocity, goal, goal if self.goal is None else self.goal,
-                       self.limits.velocity, self.limits.acceleration, self.robot.lower, self.robot.upper,
-                       float(self.intervals[k]), q, velocity)
+        q, velocity, held = np.empty(self.robot.n), np.empty(self.robot.n), np.empty(self.robot.n, dtype=bool)
+        count = command(previous, self.velocity, goal, goal if self.goal is None else self.goal,
+                        self.limits.velocity, self.limits.acceleration, self.robot.lower, self.robot.upper,
+                        float(self.intervals[k]), q, velocity, held)
         self.velocity, self.goal = velocity, goal
-        self.lagging.append(bool(held.any()))
-        if not held.any():
+        self.lagging.append(count > 0)
+        if not count:
             return result
         request = make_request(self.problem, tolerance=self.asked["tolerance"],
                                angle_tolerance=self.asked["angle_tolerance"])

@@ -19,7 +19,7 @@ limits (the target moves faster than the robot may), or the goal itself misses i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -32,9 +32,8 @@ from ..model.robot import Robot
 from .timing import command, joint_limits
 
 
-@dataclass(frozen=True)
-class ServoStep:
-    """One tick's answer (its arrays are read-only: the servo's own state).
+class ServoStep(NamedTuple):
+    """One tick's answer (its arrays are the servo's own state: read them, do not write them).
 
     Attributes:
         q: ``(n,)`` the configuration to command [rad / m].
@@ -44,6 +43,7 @@ class ServoStep:
         goal_reached: the goal meets the task.
         held: ``bool (n,)`` the coordinates a velocity or acceleration limit held short of the goal.
         reason: ``""`` when reached; else why not.
+        names: the robot's coordinate names (for :attr:`limited`).
     """
 
     q: np.ndarray
@@ -106,16 +106,15 @@ class Servo:
                 raise TaskError("step(target=...) is for a servo made by Servo.pose; move your terms' targets instead")
             self._term.set_target(target)
         found = solve_local(self.problem.program, self.goal, self._draws, self.settings)
-        goal = found.x
-        q, velocity = np.empty_like(self.q), np.empty_like(self.q)
-        held = command(self.q, self.velocity, goal, self.goal, self.velocity_limits, self.acceleration_limits,
-                       self.robot.lower, self.robot.upper, float(dt), q, velocity)
-        for a in (q, velocity, goal):  # shared with the step's answer: nobody writes into them
-            a.flags.writeable = False
-        self.q, self.velocity, self.goal = q, velocity, goal
-        reached = bool(found.reached) and not held.any()
+        goal, n = found.x, self.q.shape[0]
+        q, velocity, held = np.empty(n), np.empty(n), np.empty(n, dtype=bool)
+        count = command(self.q, self.velocity, goal, self.goal, self.velocity_limits, self.acceleration_limits,
+                        self.robot.lower, self.robot.upper, float(dt), q, velocity, held)
+        self.q, self.velocity, self.goal = q, velocity, goal  # (replaced each tick, never written: shared)
+        reached = found.reached and not count
         reason = "" if reached else self._why(found.reached, held)
-        return ServoStep(q, velocity, goal, reached, bool(found.reached), held, reason, self.robot.coordinate_names)
+        return tuple.__new__(ServoStep, (q, velocity, goal, reached, found.reached, held, reason,
+                                         self.robot.coordinate_names))
 
     def _why(self, goal_reached: bool, held: np.ndarray) -> str:
         if not goal_reached:

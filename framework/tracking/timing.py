@@ -61,12 +61,12 @@ def positive_limits(value, n: int, what: str) -> np.ndarray:
 
 
 @compiled
-def command(q, velocity, goal, last_goal, v_max, a_max, lower, upper, dt, q_next, v_next):
+def command(q, velocity, goal, last_goal, v_max, a_max, lower, upper, dt, q_next, v_next, held):
     """The next configuration ``q_next`` and velocity ``v_next`` ``(n,)`` towards ``goal`` (moving from
     ``last_goal`` in ``dt``) from ``q`` moving at ``velocity``: the step scaled by one factor so that no joint
     exceeds ``v_max`` nor the speed from which it still meets the goal without overshooting (the goal's own speed
     plus ``√(2 a_max d)``), then each joint's change of velocity clamped to ``± a_max dt``, the result kept in
-    ``[lower, upper]``. Returns which joints a limit held short of the goal ``bool (n,)``."""
+    ``[lower, upper]``; ``held`` ``bool (n,)``: the joints a limit held short of the goal. Returns how many."""
     n = q.shape[0]
     scale = 1.0
     for i in range(n):
@@ -74,7 +74,7 @@ def command(q, velocity, goal, last_goal, v_max, a_max, lower, upper, dt, q_next
         if wanted > 0.0:
             cap = min(v_max[i], abs(goal[i] - last_goal[i]) / dt + np.sqrt(2.0 * a_max[i] * abs(goal[i] - q[i])))
             scale = min(scale, cap / wanted)
-    held = np.zeros(n, dtype=np.bool_)
+    count = 0
     for i in range(n):
         v = scale * (goal[i] - q[i]) / dt
         change = a_max[i] * dt
@@ -84,7 +84,8 @@ def command(q, velocity, goal, last_goal, v_max, a_max, lower, upper, dt, q_next
         v_next[i] = (x - q[i]) / dt
         q_next[i] = x
         held[i] = abs(x - goal[i]) > 1e-12
-    return held
+        count += held[i]
+    return count
 
 
 def segment_intervals(times: np.ndarray) -> np.ndarray:
