@@ -7,10 +7,10 @@ every millisecond for 3 s, from the middle of the joint box (at rest). Limits: t
 (×1) and 20 rad/s² joint accelerations (pink's AccelerationLimit; mink has none: its rows say n/a), the joint bounds.
 
 - metaik ``tracking.Servo.pose`` (its goal solved by the local engine, the step within the limits);
-- pink 4.4 (``solve_ik`` with a FrameTask, ConfigurationLimit, VelocityLimit, AccelerationLimit told each tick's
+- pink 4.4 (``solve_ik`` with a FrameTask and a PostureTask of cost 1e-3 at the start, ConfigurationLimit, VelocityLimit, AccelerationLimit told each tick's
   velocity by ``set_last_integration``; QP by daqp; ``integrate_inplace``; a tick whose QP has no solution holds
   still), on the same Pinocchio model;
-- mink 1.3 (``solve_ik`` with a FrameTask on link 7 (MuJoCo fuses the fixed links after it), the TCP's offset on the target,
+- mink 1.3 (``solve_ik`` with a FrameTask and a PostureTask of cost 1e-3, the frame on link 7 (MuJoCo fuses the fixed links after it), the TCP's offset on the target,
   ConfigurationLimit and VelocityLimit; daqp), on the URDF loaded by MuJoCo (meshes dropped).
 
 Targets: a 10 cm circle at 0.5 Hz; the same with 2 mm of Gaussian noise per tick (a hand-held device); the circle's
@@ -45,6 +45,9 @@ from tests.conftest import example_robot_data_dir  # noqa: E402
 OUT = report.ROOT / "docs" / "results" / "servo.md"
 DT, TICKS, SETTLE = 1e-3, 3000, 500
 ACCELERATION = 20.0
+#: Cost of pink's and mink's posture task (their examples' regularization of a redundant arm; without it their QP
+#: is singular in the arm's null space and daqp finds no solution on many ticks).
+POSTURE = 1e-3
 TCP, HAND = "panda_hand_tcp", "panda_link7"  # (MuJoCo fuses the fixed links after link 7 into it)
 
 
@@ -86,18 +89,21 @@ def metaik_loop(robot: fw.Robot):
 def pink_loop(robot: fw.Robot):
     import pink
     from pink.limits import AccelerationLimit, ConfigurationLimit, VelocityLimit
-    from pink.tasks import FrameTask
+    from pink.tasks import FrameTask, PostureTask
 
     model = robot.model
     configuration = pink.Configuration(model, model.createData(), robot.to_pinocchio(robot.middle))
     task = FrameTask(TCP, position_cost=1.0, orientation_cost=1.0)
+    posture = PostureTask(cost=POSTURE)  # the redundant arm's null space (pink's examples do the same)
+    posture.set_target_from_configuration(configuration)
     acceleration = AccelerationLimit(model, np.full(model.nv, ACCELERATION))
     limits = [ConfigurationLimit(model), VelocityLimit(model), acceleration]
 
     def tick(target: pin.SE3) -> np.ndarray:
         task.set_target(target)
         try:
-            velocity = pink.solve_ik(configuration, [task], DT, solver="daqp", limits=limits, safety_break=False)
+            velocity = pink.solve_ik(configuration, [task, posture], DT, solver="daqp", limits=limits,
+                                     safety_break=False)
         except pink.exceptions.NoSolutionFound:  # the QP infeasible: hold still this tick
             velocity = np.zeros(model.nv)
             tick.failed += 1
@@ -121,6 +127,8 @@ def mink_loop(robot: fw.Robot):
     configuration.update(robot.to_pinocchio(robot.middle)[: model.nq])
     hand_tcp = (robot.frame_placement(robot.middle, HAND).inverse() * robot.frame_placement(robot.middle, TCP))
     task = mink.FrameTask(HAND, "body", position_cost=1.0, orientation_cost=1.0)
+    posture = mink.PostureTask(model, cost=POSTURE)  # the redundant arm's null space (mink's examples do the same)
+    posture.set_target_from_configuration(configuration)
     names = [model.joint(i).name for i in range(model.njnt)]
     limits = [mink.ConfigurationLimit(model),
               mink.VelocityLimit(model, dict(zip(names, velocity_limits(robot))))]
@@ -128,7 +136,7 @@ def mink_loop(robot: fw.Robot):
     def tick(target: pin.SE3) -> np.ndarray:
         task.set_target(mink.SE3.from_matrix((target * hand_tcp.inverse()).homogeneous))
         try:
-            velocity = mink.solve_ik(configuration, [task], DT, "daqp", limits=limits)
+            velocity = mink.solve_ik(configuration, [task, posture], DT, "daqp", limits=limits)
         except mink.exceptions.NoSolutionFound:  # the QP infeasible: hold still this tick
             velocity = np.zeros(model.nv)
             tick.failed += 1
