@@ -32,6 +32,7 @@ def test_the_learning_path_is_complete():
         "04_compare_solvers",
         "05_real_robots",
         "06_collisions",
+        "07_motion_limits",
     ]
 
 
