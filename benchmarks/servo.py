@@ -174,7 +174,7 @@ def run(robot: fw.Robot, make, targets: list[pin.SE3]) -> dict:
 
 def dual_youbot_ticks() -> float:
     """Median tick [µs] of metaik's servo on the dual mobile youBot (13 coordinates): both hands on a moving circle
-    (position terms) and self-collision, at 1 kHz with 20 rad/s² (metaik only: the issue's second timing)."""
+    (position terms) and self-collision, at 1 kHz with 20 rad/s² (metaik only: its timing with collision terms)."""
     robot = fw.load_robot("youbot_dual_mobile")
     shape = fw.RobotShape(robot)
     hands = robot.end_effectors[:2]
