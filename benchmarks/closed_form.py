@@ -1,7 +1,7 @@
 """Closed-form IK against EAIK, ur-analytic-ik and the numeric engine on the same poses; paper 002's paths with it.
 
-Run: python benchmarks/closed_form.py [--poses 1000]      (about 2 min on 2 cores; needs `pip install eaik
-ur-analytic-ik`, the peers, and the test extra's rtb-data and pybullet for the KUKA arms)
+Run: python benchmarks/closed_form.py [--poses 1000]      (about 5 min on 2 cores; needs the peers,
+`pip install -e .[peers]`, and the test extra's rtb-data and pybullet for the KUKA arms)
 
 Protocol. Per arm, P poses: the forward kinematics (Pinocchio) of configurations drawn uniformly within the limits
 (seeded), so every pose is reachable. Each method gets the same poses, in chunks of 100, the methods alternated

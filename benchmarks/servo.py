@@ -1,6 +1,6 @@
 """The servo loop beside pink and mink: the same targets streamed at 1 kHz, the same joint limits.
 
-Run: python benchmarks/servo.py     (about a minute; needs `pip install pin-pink daqp mink`, the peers)
+Run: python benchmarks/servo.py     (about a minute; needs the peers: `pip install -e .[peers]`)
 
 Robot: the Franka Panda of example-robot-data (its fingers locked), the hand's TCP frame servoed to a pose target
 every millisecond for 3 s, from the middle of the joint box (at rest). Limits: the URDF's joint velocity limits
