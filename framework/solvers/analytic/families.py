@@ -112,8 +112,8 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
 @internal
 def _three_parallel(H, P, c, RG, tG, reference, out):
     """The solutions of the three-parallel-axes family (see the module docstring); returns their count."""
-    h1, h2, h3, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 4), row(H, 5)
-    p1, p2, p3, p4 = row(P, 0), row(P, 1), row(P, 2), row(P, 3)
+    h1, h2, h5, h6 = row(H, 0), row(H, 1), row(H, 4), row(H, 5)
+    p1, p4 = row(P, 0), row(P, 3)
     w = add(_of(RG, c), tG)
     across = _unit_across(h6, h5)
     G6, Gacross = _of(RG, h6), _of(RG, across)
@@ -129,21 +129,32 @@ def _three_parallel(H, P, c, RG, tG, reference, out):
             theta = sp1(rotate(h5, q5, h6), A6, h2, reference[1] + reference[2] + reference[3])
             q6 = sp1(across, rotate(h5, -q5, rotate(h2, -theta, Aacross)), h6, reference[5])
             x4 = sub(w1, rotate(h2, theta, sub(c, p4)))  # where axis 4's point goes under e^{ξ2 q2} e^{ξ3 q3}
-            count3, a3, b3 = sp3(sub(p4, p3), sub(p2, p3), h3, norm(sub(x4, p2)), reference[2])
+            count3, q2a, q3a, q2b, q3b = _elbow(H, P, 0, x4, reference)
             for m in range(branches(count3)):
-                q3 = a3 if m == 0 else b3
-                q2 = sp1(sub(_apply(h3, p3, q3, p4), p2), sub(x4, p2), h2, reference[1])
+                q2, q3 = (q2a, q3a) if m == 0 else (q2b, q3b)
                 out[n, 0], out[n, 1], out[n, 2] = q1, q2, q3
                 out[n, 3], out[n, 4], out[n, 5] = theta - q2 - q3, q5, q6
                 n += 1
     return n
 
 
+@internal(inline=True)
+def _elbow(H, P, first, x4, reference):
+    """Joints 2 and 3 of three parallel axes (slots ``first + 1``, ``first + 2``): ``(count, q2a, q3a, q2b, q3b)``
+    taking axis 4's point to ``x4`` — q3 keeps its distance from axis 2 (sp3), q2 turns it there (sp1)."""
+    h2, h3 = row(H, first + 1), row(H, first + 2)
+    p2, p3, p4 = row(P, first + 1), row(P, first + 2), row(P, first + 3)
+    count, a, b = sp3(sub(p4, p3), sub(p2, p3), h3, norm(sub(x4, p2)), reference[first + 2])
+    q2a = sp1(sub(_apply(h3, p3, a, p4), p2), sub(x4, p2), h2, reference[first + 1])
+    q2b = sp1(sub(_apply(h3, p3, b, p4), p2), sub(x4, p2), h2, reference[first + 1])
+    return count, q2a, a, q2b, b
+
+
 @internal
 def _five_parallel(H, P, RG, tG, reference, out):
     """The solutions of the five-joint family (see the module docstring; joints in slots 1-5); returns their count."""
-    h1, h2, h3, h5 = row(H, 1), row(H, 2), row(H, 3), row(H, 5)
-    p1, p2, p3, p4, p5 = row(P, 1), row(P, 2), row(P, 3), row(P, 4), row(P, 5)
+    h1, h2, h5 = row(H, 1), row(H, 2), row(H, 5)
+    p1, p4, p5 = row(P, 1), row(P, 4), row(P, 5)
     w = add(_of(RG, p5), tG)
     across = _unit_across(h5, h2)
     G5, Gacross = _of(RG, h5), _of(RG, across)
@@ -156,10 +167,9 @@ def _five_parallel(H, P, RG, tG, reference, out):
         theta = sp1(h5, A5, h2, reference[2] + reference[3] + reference[4])
         q5 = sp1(across, rotate(h2, -theta, Aacross), h5, reference[5])
         x4 = sub(w1, rotate(h2, theta, sub(p5, p4)))  # where axis 4's point goes under e^{ξ2 q2} e^{ξ3 q3}
-        count3, a3, b3 = sp3(sub(p4, p3), sub(p2, p3), h3, norm(sub(x4, p2)), reference[3])
+        count3, q2a, q3a, q2b, q3b = _elbow(H, P, 1, x4, reference)
         for m in range(branches(count3)):
-            q3 = a3 if m == 0 else b3
-            q2 = sp1(sub(_apply(h3, p3, q3, p4), p2), sub(x4, p2), h2, reference[2])
+            q2, q3 = (q2a, q3a) if m == 0 else (q2b, q3b)
             out[n, 0], out[n, 1], out[n, 2], out[n, 3] = 0.0, q1, q2, q3
             out[n, 4], out[n, 5] = theta - q2 - q3, q5
             n += 1
@@ -375,13 +385,18 @@ def _first_copy(value, lower):
     return value + 2.0 * np.pi * np.ceil((lower - value) / (2.0 * np.pi) - 1e-12)
 
 
+@internal(inline=True)
+def _copies_of(value, lower, upper):
+    """How many 2π copies of one joint's ``value`` lie within ``[lower, upper]`` (0: none)."""
+    return max(0, int(np.floor((upper + 1e-12 - _first_copy(value, lower)) / (2.0 * np.pi))) + 1)
+
+
 @internal
 def _count_copies(q, lower, upper):
     """How many 2π copies of ``q`` ``(6,)`` lie within ``[lower, upper]`` (0 when a joint has none)."""
     total = 1
     for i in range(6):
-        first = _first_copy(q[i], lower[i])
-        total *= max(0, int(np.floor((upper[i] + 1e-12 - first) / (2.0 * np.pi))) + 1)
+        total *= _copies_of(q[i], lower[i], upper[i])
     return total
 
 
@@ -391,7 +406,7 @@ def _write_copies(q, lower, upper, out, at):
     counts = np.empty(6, dtype=np.int64)
     total = 1
     for i in range(6):
-        counts[i] = max(0, int(np.floor((upper[i] + 1e-12 - _first_copy(q[i], lower[i])) / (2.0 * np.pi))) + 1)
+        counts[i] = _copies_of(q[i], lower[i], upper[i])
         total *= counts[i]
     for m in range(total):
         rest = m

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 
 from .families import (FIVE_PARALLEL, THREE_PARALLEL, WRIST_CROSSING, WRIST_PARALLEL, exact_solutions,
                        nearest_configurations, table)
@@ -168,7 +169,7 @@ def _centre_moves(frame, H, P, M, coordinates, lower_all, upper_all, f, base) ->
     """Whether the family's centre moves with free joint ``f`` (it lies on the joints after it), checked at a
     second value of the joint: the 6R chain there must be of the same family; None if not."""
     theta = 0.7
-    R = _rotation(H[f], theta)
+    R = pin.exp3(theta * H[f])
     others = [i for i in range(7) if i != f]
     after = np.array([i > f for i in others])
     Ht = np.where(after[:, None], H[others] @ R.T, H[others])
@@ -181,11 +182,6 @@ def _centre_moves(frame, H, P, M, coordinates, lower_all, upper_all, f, base) ->
     if np.allclose(moved.centre, R @ (base.centre - P[f]) + P[f], atol=1e-9):
         return True
     return False if np.allclose(moved.centre, base.centre, atol=1e-9) else None
-
-
-def _rotation(h: np.ndarray, theta: float) -> np.ndarray:
-    K = np.array([[0, -h[2], h[1]], [h[2], 0, -h[0]], [-h[1], h[0], 0]])
-    return np.eye(3) + np.sin(theta) * K + (1 - np.cos(theta)) * K @ K
 
 
 def _oriented(H: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

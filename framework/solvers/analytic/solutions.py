@@ -61,9 +61,7 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
     """Every solution of ``frame`` reaching ``pose`` (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``; 4
     numbers need ``quaternion``), within the joint limits, nearest to ``reference`` ``(n,)`` first (default: the
     middle of the bounds). A :class:`TaskError` says why when the chain has no closed form."""
-    form = closed_form(robot, frame)
-    if not form.exists:
-        raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
+    form = _solvable(robot, frame)
     x_ref = robot.derived(_middle) if reference is None else _reference(robot, reference)
     packed = pose_parameters(pose, lambda: f"pose of {frame!r}", quaternion)
     if form.free.size:
@@ -125,9 +123,7 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
     from ...costs import Pose
     from ...engine.batch import in_chunks
 
-    form = closed_form(robot, frame)
-    if not form.exists:
-        raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
+    form = _solvable(robot, frame)
     if form.free.size:
         raise TaskError(f"{frame!r} of {robot.name} is a 7R chain with a searched joint: solve its poses one by one "
                         "(analytic_ik), or lock the joint (load_robot(..., locked={...}))")
@@ -143,6 +139,14 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
 
     in_chunks(work, len(packed), workers=workers)
     return AnalyticBatch(chain[:, :, form.first:], counts, form.coordinates[form.first:], x_ref)
+
+
+def _solvable(robot: Robot, frame: str) -> ClosedForm:
+    """The closed form of ``frame``, or a :class:`TaskError` saying why there is none."""
+    form = closed_form(robot, frame)
+    if not form.exists:
+        raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
+    return form
 
 
 def _middle(robot: Robot) -> np.ndarray:

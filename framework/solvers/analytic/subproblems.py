@@ -101,37 +101,14 @@ def rotate_cs(k, c, s, v):
 def sp1(p, q, k, free):
     """θ with ``rot(k, θ) p = q`` (least squares when they differ in height or distance); ``free`` when ``p`` lies
     on the axis (every θ)."""
-    a = sub(p, scale(dot(k, p), k))
-    b = sub(q, scale(dot(k, q), k))
-    c = dot(k, cross(a, b))
-    d = dot(a, b)
-    if np.sqrt(c * c + d * d) <= FREE * (1.0 + dot(a, a) + dot(b, b)):
-        return free
-    return np.arctan2(c, d)
+    return sp1_cs(p, q, k, free)[0]
 
 
 @internal(inline=True)
 def sp4(h, p, k, d, free):
     """θ with ``hᵀ rot(k, θ) p = d``: ``(count, θa, θb)``, count 0 (none), 1, 2, or 3 (every θ: ``θa = free``)."""
-    hk, kp = dot(h, k), dot(k, p)
-    a = dot(h, p) - hk * kp
-    b = dot(h, cross(k, p))
-    rest = d - hk * kp
-    r = np.sqrt(a * a + b * b)
-    size = 1.0 + norm(p) + abs(d)
-    if r <= FREE * size:
-        if abs(rest) <= 1e-9 * size:
-            return 3, free, free
-        return 0, 0.0, 0.0
-    c = rest / r
-    if abs(c) > 1.0 + EDGE:
-        return 0, 0.0, 0.0
-    c = min(1.0, max(-1.0, c))
-    phi = np.arctan2(b, a)
-    delta = np.arccos(c)
-    if delta == 0.0:
-        return 1, phi, phi
-    return 2, phi + delta, phi - delta
+    count, ta, _, _, tb, _, _ = sp4_cs(h, p, k, d, free)
+    return count, ta, tb
 
 
 @internal(inline=True)
