@@ -52,7 +52,7 @@ def closed_form_start(problem, x0: np.ndarray) -> np.ndarray | None:
     task = pose_task(problem)
     if task is None:
         return None
-    if len(problem.objective) == task.terms:  # the pose alone: every solution costs 0, the nearest is taken
+    if settles(problem):  # the pose alone: every solution costs 0, the nearest is taken
         X = task.form.nearest(task.pose, x0)
         return X[0] if len(X) else None
     X = task.form.solutions(task.pose, x0)  # every 2π copy: the other terms may prefer any
@@ -65,8 +65,8 @@ def closed_form_start(problem, x0: np.ndarray) -> np.ndarray | None:
 def settles(problem) -> bool:
     """Whether a closed-form start (:func:`closed_form_start`) is ``problem``'s answer as it is: its objective is the
     terms fixing the pose alone (nothing else to weigh, nothing to check), so the engine has nothing to add."""
-    fixed = problem.fixed_frames
-    return bool(fixed) and len(problem.objective) == fixed[0][2] and not problem.checks_collisions
+    fixed = problem.fixed_frames  # (a collision term fixes no frame: with one, the count falls short)
+    return bool(fixed) and len(problem.objective) == fixed[0][2]
 
 
 def prepare(problem) -> None:
