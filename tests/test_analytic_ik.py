@@ -117,6 +117,26 @@ def test_a_pose_beyond_reach_or_limits_says_so():
     assert len(hidden) == 0 and "outside the joint limits" in hidden.reason
 
 
+def test_every_form_of_a_pose_gives_the_same_solutions_and_a_bad_one_says_what_is_wrong():
+    """An SE3, its 4x4 matrix and its (position, rotation) pair give the same solutions (the SE3 goes straight to
+    the compiled call, the others are checked first); a matrix that is no transform raises, it does not read as
+    beyond reach."""
+    robot = fw.load_robot("puma560")
+    target = robot.frame_placement(robot.random_configurations(np.random.default_rng(4), 1)[0], "ee")
+    X = fw.analytic_ik(robot, "ee", target).configurations
+    assert len(X) > 0
+    for same in (target.homogeneous, (target.translation, target.rotation)):
+        assert np.array_equal(fw.analytic_ik(robot, "ee", same).configurations, X)
+    sheared = target.homogeneous
+    sheared[0, 1] += 0.1
+    with pytest.raises(TaskError, match="not a rotation matrix"):
+        fw.analytic_ik(robot, "ee", sheared)
+    bad = pin.SE3(target)
+    bad.rotation = 1.1 * target.rotation  # pin stores it as given
+    with pytest.raises(TaskError, match="not a rotation matrix"):
+        fw.analytic_ik(robot, "ee", bad)
+
+
 def test_chains_without_a_closed_form_say_why():
     cases = {"baxter_arm": "a 7R chain, but no joint", "stanford_arm": "other than revolute"}
     for name, why in cases.items():

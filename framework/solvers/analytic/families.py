@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...compiled.native import compiled, internal
+from ...model.rotations import pack_transform
 from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp1_cs, sp2, sp3,
                           sp3_cs, sp4, sp4_cs, sub, times)
 
@@ -274,8 +275,12 @@ def _tool_over(M, T):
 
 
 @compiled
-def exact_solutions(code, chain, coordinates, pose, x_ref, tolerance):
-    """:func:`every_solution` from Python."""
+def exact_solutions(code, chain, coordinates, T, x_ref, tolerance):
+    """:func:`every_solution` from Python, of a homogeneous transform ``T`` ``(4, 4)`` (what ``pinocchio.SE3``
+    gives: one call from a user's pose to its solutions); none when ``T`` is no transform (the caller says why)."""
+    pose = np.empty(12)
+    if pack_transform(T, pose) != 0:
+        return np.empty((0, x_ref.shape[0]))
     return every_solution(code, chain, coordinates, pose, x_ref, tolerance)
 
 

@@ -83,8 +83,16 @@ class ClosedForm:
         if self.free.size:
             return free_solutions(self.code, self.tables[0 if limits else 1], self.free, self.coordinates,
                                   _writable(pose), _writable(x_ref), float(tolerance), True)
-        return exact_solutions(self.code, self.tables[0 if limits else 1], self.coordinates, _writable(pose),
+        return exact_solutions(self.code, self.tables[0 if limits else 1], self.coordinates, homogeneous(pose),
                                _writable(x_ref), float(tolerance))
+
+
+def homogeneous(pose: np.ndarray) -> np.ndarray:
+    """The 4x4 homogeneous transform of a pose ``(12,)`` (position [m], row-major rotation)."""
+    T = np.eye(4)
+    T[:3, 3] = pose[:3]
+    T[:3, :3] = np.reshape(pose[3:], (3, 3))
+    return T
 
 
 def _writable(a) -> np.ndarray:

@@ -22,11 +22,11 @@ from ...errors import TaskError
 from ...model.joints import JointKind
 from ...model.robot import Robot
 from .families import MOST, exact_solutions, nearest_solutions
-from .forms import ClosedForm, five_joints, form_of, with_free_joint
+from .forms import ClosedForm, five_joints, form_of, homogeneous, with_free_joint
 from .free_joint import STEP
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class AnalyticSolutions:
     """Every solution of one pose.
 
@@ -61,13 +61,15 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
     """Every solution of ``frame`` reaching ``pose`` (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``; 4
     numbers need ``quaternion``), within the joint limits, nearest to ``reference`` ``(n,)`` first (default: the
     middle of the bounds). A :class:`TaskError` says why when the chain has no closed form."""
-    form = _solvable(robot, frame)
-    x_ref = robot.derived(_middle) if reference is None else _reference(robot, reference)
-    packed = pose_parameters(pose, lambda: f"pose of {frame!r}", quaternion)
-    if form.free.size:
-        X = form.solutions(packed, x_ref, tolerance)
-    else:  # the common case called straight (arrays of the compiled signature's types: fresh or owned here)
-        X = exact_solutions(form.code, form.tables[0], form.coordinates, packed, x_ref, float(tolerance))
+    form, middle = _solvable(robot, frame)
+    x_ref = middle if reference is None else _reference(robot, reference)
+    if not form.free.size:  # a 6R chain: the pose's transform straight to the compiled call (it checks it)
+        T = pose.homogeneous if type(pose) is pin.SE3 else homogeneous(_packed(pose, frame, quaternion))
+        X = exact_solutions(form.code, form.tables[0], form.coordinates, T, x_ref, float(tolerance))
+        if len(X):
+            return AnalyticSolutions(X, form.family)
+    packed = _packed(pose, frame, quaternion)  # (none: a pose that is no transform says why here)
+    X = form.solutions(packed, x_ref, tolerance) if form.free.size else X
     if len(X):
         return AnalyticSolutions(X, form.family)
     if form.free.size:
@@ -79,6 +81,11 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
                   "the pose is beyond the arm's reach (no exact solution" +
                   ("; a five-joint arm takes only some orientations at a point)" if form.first else ")"))
     return AnalyticSolutions(X, form.family, reason)
+
+
+def _packed(pose, frame: str, quaternion: str | None) -> np.ndarray:
+    """The pose ``(12,)`` (position, row-major rotation), checked: a :class:`TaskError` names what is wrong."""
+    return pose_parameters(pose, lambda: f"pose of {frame!r}", quaternion)
 
 
 @dataclass(frozen=True)
@@ -123,7 +130,7 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
     from ...costs import Pose
     from ...engine.batch import in_chunks
 
-    form = _solvable(robot, frame)
+    form, _ = _solvable(robot, frame)
     if form.free.size:
         raise TaskError(f"{frame!r} of {robot.name} is a 7R chain with a searched joint: solve its poses one by one "
                         "(analytic_ik), or lock the joint (load_robot(..., locked={...}))")
@@ -141,17 +148,18 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
     return AnalyticBatch(chain[:, :, form.first:], counts, form.coordinates[form.first:], x_ref)
 
 
-def _solvable(robot: Robot, frame: str) -> ClosedForm:
-    """The closed form of ``frame``, or a :class:`TaskError` saying why there is none."""
-    form = closed_form(robot, frame)
+def _solvable(robot: Robot, frame: str) -> tuple[ClosedForm, np.ndarray]:
+    """The closed form of ``frame`` and the default reference (a writable copy of the middle of the bounds, never
+    written), in one look-up made once per robot and frame (a call takes microseconds); or a :class:`TaskError`
+    saying why there is no closed form."""
+    form, middle = robot.derived(_prepared, frame)
     if not form.exists:
         raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
-    return form
+    return form, middle
 
 
-def _middle(robot: Robot) -> np.ndarray:
-    """A writable copy of the middle of the bounds, the default reference (made once per robot; never written)."""
-    return np.array(robot.middle, dtype=float)
+def _prepared(robot: Robot, frame: str) -> tuple[ClosedForm, np.ndarray]:
+    return closed_form(robot, frame), np.array(robot.middle, dtype=float)
 
 
 def _reference(robot: Robot, reference) -> np.ndarray:
