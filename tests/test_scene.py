@@ -118,7 +118,7 @@ def test_self_collision_jacobian_matches_differences_on_the_mobile_dual_youbot(r
     shape = fw.RobotShape(robot)
     term = fw.SelfCollision(shape, margin=0.05)
     kinds = {b.kind for b in term.blocks(robot)}
-    from framework.costs.collision import SOLIDS, SPHERES
+    from framework.costs.sphere_rows import SOLIDS, SPHERES
 
     assert kinds == {SPHERES, SOLIDS}
     program = Program(robot, 1.0 * term)

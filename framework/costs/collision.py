@@ -1,7 +1,7 @@
 """Collision avoidance as task terms on sphere covers: hinges on signed distances, zero when clear.
 
 The spheres of a :class:`~framework.geometry.spheres.SphereCover` sit on the bodies (joints) they move with; each pair of
-bodies is one ``SPHERES`` row (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
+bodies is one ``SPHERES`` row (:mod:`~framework.costs.sphere_rows`) (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
 — a link's own (``geometry[name]`` frames) or an obstacle — one ``SOLIDS`` row (the closest sphere's signed
 distance to the solid), so a term has one row per pair of bodies however many spheres cover them, and every
 solver reads them through the one term interface. Links' boxes and capsules are used whole on one side of a pair
@@ -13,234 +13,22 @@ the engine takes its last steps when the fatter spheres keep it from the task.
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import warnings
 from collections.abc import Sequence
+from typing import ClassVar
 
 import numpy as np
 import pinocchio as pin
 
-from ..geometry.collision import CollisionReport, RobotShape
 from ..errors import TaskError
+from ..geometry.collision import CollisionReport, RobotShape
 from ..geometry.hulls import HullPair, moving_loose, obstacle_pairs, self_pairs
-from ..model.robot import Robot
-from ..compiled.native import internal
 from ..geometry.scene import Scene
-from ..geometry.solids import solid_distance
 from ..geometry.spheres import SphereCover
-from . import blocks as B
+from ..model.robot import Robot
 from .base import Term, TermEntry
-from .curvature import chain_curvature, projected_curvature
-from .kinds import BlockKind
-from .lie import on_frame, world_point
 from .program import Block
-from .workspace import RESIDUAL, hinge_row, views
-
-#: How far beyond its margin [m] a sphere pair still counts as a ``SPHERES`` row's closest (its curvature is asked
-#: where the row is held on its boundary, the gap at the margin up to rounding).
-PAIR_BAND = 1e-3
-
-
-def spheres_residual(ws) -> int:
-    """The ``SPHERES`` row (:func:`spheres_rows`)."""
-    v = views(ws)
-    block = v.blocks[ws.block]
-    spheres_rows(v.poses, v.jacobians, block.fa, block.fb, v.params, block.params, v.r, v.J, ws.row,
-                 ws.mode != RESIDUAL, ws.n, v.scratch)
-    return 1
-
-
-def solids_residual(ws) -> int:
-    """The ``SOLIDS`` row (:func:`solids_rows`)."""
-    v = views(ws)
-    block = v.blocks[ws.block]
-    solids_rows(v.poses, v.jacobians, block.fa, block.fb, v.params, block.params, v.r, v.J, ws.row,
-                ws.mode != RESIDUAL, ws.n, v.scratch)
-    return 1
-
-
-def spheres_second_order(ws) -> int:
-    """``mu ∇²d`` of a ``SPHERES`` row: ``d = ‖v‖ − r_a − r_b``, ``v = c_a − c_b`` between the closest pair's
-    centres (within :data:`PAIR_BAND` of the margin; none: nothing), ``∇²d = Dᵀ(I − uuᵀ)D/‖v‖ + Σ u_c ∇²v_c`` with
-    ``D = D_a − D_b`` the centres' Jacobians (``J_p + ω × o``, ``o = R c``) and ``∇²`` of a point fixed on a frame
-    from the product of exponentials."""
-    v = views(ws)
-    block, mu, n = v.blocks[ws.block], v.multipliers[0], ws.n
-    fa, fb, p, params, P, Jf = block.fa, block.fb, block.params, v.params, v.poses, v.jacobians
-    S = np.empty(3 * int(params[p + 1]))
-    _, ai, bj = closest_pair(P, fa, fb, params, p, params[p + 2] + PAIR_BAND, S)
-    if ai < 0:
-        return 0
-    q = p + 12 + 4 * ai
-    s = p + 12 + 4 * int(params[p]) + 4 * bj
-    oa = on_frame(P, fa, params[q], params[q + 1], params[q + 2])
-    ob = on_frame(P, fb, params[s], params[s + 1], params[s + 2])
-    d = np.empty(3)
-    for c in range(3):
-        d[c] = P[fa, 9 + c] + oa[c] - P[fb, 9 + c] - ob[c]
-    dist = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-    if dist <= 0.0:
-        return 0
-    u = d / dist
-    Da, Db = _point_jacobian(Jf, fa, oa, n), _point_jacobian(Jf, fb, ob, n)
-    chain_curvature(fa, mu * u[0], mu * u[1], mu * u[2], Da, Jf, v.chain_ptr, v.chain_idx, v.hessian)
-    chain_curvature(fb, -mu * u[0], -mu * u[1], -mu * u[2], Db, Jf, v.chain_ptr, v.chain_idx, v.hessian)
-    projected_curvature(mu / dist, u, Da - Db, v.hessian)
-    return 0
-
-
-@internal(inline=True)
-def _point_jacobian(jacobians, f, o, n):
-    """``(3, n)``: the Jacobian ``J_p + ω × o`` of the point at offset ``o`` (world axes) from frame ``f``'s
-    origin."""
-    D = np.empty((3, n))
-    for i in range(n):
-        wx, wy, wz = jacobians[f, 3, i], jacobians[f, 4, i], jacobians[f, 5, i]
-        D[0, i] = jacobians[f, 0, i] + wy * o[2] - wz * o[1]
-        D[1, i] = jacobians[f, 1, i] + wz * o[0] - wx * o[2]
-        D[2, i] = jacobians[f, 2, i] + wx * o[1] - wy * o[0]
-    return D
-
-
-@internal(inline=True)
-def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) -> None:
-    """The ``SPHERES`` residual: ``min(0, d*)`` with ``d* = min_ij ‖(p_a + R_a c_ai) − (p_b + R_b c_bj)‖ − r_ai
-    − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
-    ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame).
-
-    Exact with two prunings: bodies whose bounding spheres are ``m`` apart are clear (every pair is at least that
-    far apart), and a sphere of ``a`` farther from ``b``'s bounding sphere than the closest pair found so far
-    is skipped. ``b``'s world centres go to the scratch ``S`` (3 per sphere), each computed once.
-    """
-    na, margin = int(params[p]), params[p + 2]
-    A0, A1, A2 = world_point(out, fa, params, p + 3)
-    B0, B1, B2 = world_point(out, fb, params, p + 7)
-    RA, RB = params[p + 6], params[p + 10]
-    gap = np.sqrt((A0 - B0) ** 2 + (A1 - B1) ** 2 + (A2 - B2) ** 2) - RA - RB - margin
-    if gap >= 0.0:
-        hinge_row(gap, r, Jr, row, want_jacobian, n)
-        return
-    best, ai, bj = closest_pair(out, fa, fb, params, p, margin, S)
-    if not hinge_row(best - margin if ai >= 0 else 0.0, r, Jr, row, want_jacobian, n):
-        return
-    qa = p + 12
-    q, s = qa + 4 * ai, qa + 4 * na + 4 * bj
-    a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-    b0, b1, b2 = on_frame(out, fb, params[s], params[s + 1], params[s + 2])
-    v0, v1, v2 = out[fa, 9] + a0 - out[fb, 9] - b0, out[fa, 10] + a1 - out[fb, 10] - b1, \
-        out[fa, 11] + a2 - out[fb, 11] - b2
-    norm = np.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if norm > 0.0:
-        u0, u1, u2 = v0 / norm, v1 / norm, v2 / norm
-    else:
-        u0, u1, u2 = 0.0, 0.0, 1.0
-    ca0, ca1, ca2 = a1 * u2 - a2 * u1, a2 * u0 - a0 * u2, a0 * u1 - a1 * u0  # o_a × u
-    cb0, cb1, cb2 = b1 * u2 - b2 * u1, b2 * u0 - b0 * u2, b0 * u1 - b1 * u0
-    for i in range(n):
-        Jr[row, i] = (u0 * (Jf[fa, 0, i] - Jf[fb, 0, i]) + u1 * (Jf[fa, 1, i] - Jf[fb, 1, i])
-                      + u2 * (Jf[fa, 2, i] - Jf[fb, 2, i])
-                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i]
-                      - cb0 * Jf[fb, 3, i] - cb1 * Jf[fb, 4, i] - cb2 * Jf[fb, 5, i])
-
-
-@internal(inline=True)
-def closest_pair(out, fa, fb, params, p, within, S):
-    """``(d, i, j)``: the sphere pair ``i`` of ``a``, ``j`` of ``b`` of the ``SPHERES`` block at ``params[p:]`` whose
-    gap ``d = ‖c_ai − c_bj‖ − r_ai − r_bj`` is smallest among those below ``within`` [m] (``(within, -1, -1)``: none),
-    ``a``'s spheres pruned by ``b``'s bounding sphere; ``b``'s world centres go to the scratch ``S``."""
-    na, nb = int(params[p]), int(params[p + 1])
-    B0, B1, B2 = world_point(out, fb, params, p + 7)
-    RB = params[p + 10]
-    full = params[p + 11] != 0.0
-    qa = p + 12
-    qb = qa + 4 * na
-    qm = qb + 4 * nb
-    for j in range(nb):
-        S[3 * j], S[3 * j + 1], S[3 * j + 2] = world_point(out, fb, params, qb + 4 * j)
-    best, ai, bj = within, -1, -1  # only pairs closer than ``within`` count
-    for i in range(na):
-        a0, a1, a2 = world_point(out, fa, params, qa + 4 * i)
-        ra = params[qa + 4 * i + 3]
-        if np.sqrt((a0 - B0) ** 2 + (a1 - B1) ** 2 + (a2 - B2) ** 2) - ra - RB >= best:
-            continue  # every sphere of b is at least this far
-        for j in range(nb):
-            if not full and params[qm + nb * i + j] == 0.0:
-                continue
-            reach = best + ra + params[qb + 4 * j + 3]  # a pair closer than best has ‖v‖ < reach
-            if reach <= 0.0:
-                continue
-            v0, v1, v2 = a0 - S[3 * j], a1 - S[3 * j + 1], a2 - S[3 * j + 2]
-            vv = v0 * v0 + v1 * v1 + v2 * v2
-            if vv < reach * reach:
-                best, ai, bj = np.sqrt(vv) - ra - params[qb + 4 * j + 3], i, j
-    return best, ai, bj
-
-
-@internal(inline=True)
-def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
-    """:func:`solid_distance` of a world point to the solid at ``params[p:]``, fixed in the world (``fb < 0``) or
-    on frame ``fb``; the gradient ``g`` in the world. (One call of :func:`solid_distance`: it is inlined.)"""
-    if fb >= 0:  # the point in frame fb
-        v0, v1, v2 = x - out[fb, 9], y - out[fb, 10], z - out[fb, 11]
-        x = out[fb, 0] * v0 + out[fb, 3] * v1 + out[fb, 6] * v2
-        y = out[fb, 1] * v0 + out[fb, 4] * v1 + out[fb, 7] * v2
-        z = out[fb, 2] * v0 + out[fb, 5] * v1 + out[fb, 8] * v2
-    sd = solid_distance(x, y, z, params, p, g)
-    if fb >= 0:
-        g0, g1, g2 = g[0], g[1], g[2]
-        g[0] = out[fb, 0] * g0 + out[fb, 1] * g1 + out[fb, 2] * g2
-        g[1] = out[fb, 3] * g0 + out[fb, 4] * g1 + out[fb, 5] * g2
-        g[2] = out[fb, 6] * g0 + out[fb, 7] * g1 + out[fb, 8] * g2
-    return sd
-
-
-@internal(inline=True)
-def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
-    """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
-    frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
-    sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
-    margin, count = params[p + 16], int(params[p + 17])
-    best, arg, w0, w1, w2 = 1e300, -1, 0.0, 0.0, 0.0
-    for k in range(-1, count):  # -1: the spheres' bounding sphere; then each sphere (one call site: inlined)
-        q = p + 18 if k < 0 else p + 22 + 4 * k
-        a0, a1, a2 = world_point(out, fa, params, q)
-        d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g) - params[q + 3]
-        if k < 0:
-            if d - margin >= 0.0:  # the bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
-                hinge_row(d - margin, r, Jr, row, want_jacobian, n)
-                return
-        elif d < best:
-            best, arg, w0, w1, w2 = d, k, g[0], g[1], g[2]  # the gradient at the closest sphere's centre
-    if not hinge_row(best - margin, r, Jr, row, want_jacobian, n):
-        return
-    q = p + 22 + 4 * arg
-    a0, a1, a2 = on_frame(out, fa, params[q], params[q + 1], params[q + 2])
-    s0, s1, s2 = out[fa, 9] + a0, out[fa, 10] + a1, out[fa, 11] + a2
-    ca0, ca1, ca2 = a1 * w2 - a2 * w1, a2 * w0 - a0 * w2, a0 * w1 - a1 * w0  # o × ∇sd
-    for i in range(n):
-        Jr[row, i] = (w0 * Jf[fa, 0, i] + w1 * Jf[fa, 1, i] + w2 * Jf[fa, 2, i]
-                      + ca0 * Jf[fa, 3, i] + ca1 * Jf[fa, 4, i] + ca2 * Jf[fa, 5, i])
-    if fb >= 0:
-        d0, d1, d2 = s0 - out[fb, 9], s1 - out[fb, 10], s2 - out[fb, 11]
-        cb0, cb1, cb2 = d1 * w2 - d2 * w1, d2 * w0 - d0 * w2, d0 * w1 - d1 * w0
-        for i in range(n):
-            Jr[row, i] -= (w0 * Jf[fb, 0, i] + w1 * Jf[fb, 1, i] + w2 * Jf[fb, 2, i]
-                           + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
-
-
-
-#: Two bodies kept a margin apart through spheres fixed on them, by the closest pair: ``min(0, min_ij ‖s_ai − s_bj‖
-#: − r_ai − r_bj − m)`` (1) [m], a hinge whose Jacobian is the closest pair's. Parameters: ``n_a, n_b, m``, each
-#: body's bounding sphere (centre in its frame, radius: 4 each), a flag (1: every pair of the two lists, 0: a 0/1
-#: mask of the pairs follows the spheres), ``a``'s spheres and ``b``'s (centre, radius: 4 each), the mask
-#: (``n_a × n_b``, row-major).
-SPHERES = BlockKind("sphere pairs", spheres_residual, spheres_second_order, contact=True, margin=2)
-#: The spheres of frame ``a``'s body against one solid (a sphere, box, capsule or half-space: a row of
-#: :mod:`framework.geometry.solids`) fixed in the world or on frame ``b``, by the closest sphere: ``min(0, min_k sd(s_ak) −
-#: r_ak − m)`` (1) [m]. Parameters: the solid (16), ``m``, the count, the spheres' bounding sphere (4), the spheres
-#: (4 each); its second order is left to Gauss-Newton.
-SOLIDS = BlockKind("spheres against a solid", solids_residual, contact=True, margin=16)
+from .sphere_rows import solids_block, spheres_block
 
 
 def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3) -> str:
@@ -250,38 +38,9 @@ def _geometry_frame(shape: RobotShape, name: str, joint: int, placement: pin.SE3
     return frame
 
 
-def bounding_sphere(centers: np.ndarray, radii: np.ndarray) -> np.ndarray:
-    """A sphere ``(centre (3), radius)`` holding the spheres ``centers (k, 3)``, ``radii (k,)``: centred on their
-    centres' bounding box."""
-    center = 0.5 * (centers.min(axis=0) + centers.max(axis=0))
-    return np.r_[center, (np.linalg.norm(centers - center, axis=1) + radii).max()]
-
-
-def _spheres_block(shape: RobotShape, cover: SphereCover, pairs: list[tuple[int, int]], margin: float) -> Block:
-    """One ``SPHERES`` block over sphere pairs ``(i, j)`` of the cover, every ``i`` on one body, every ``j`` on
-    another: each body's spheres listed once, the pairs as a mask unless they are all pairs of the two lists."""
-    a, b = sorted({i for i, _ in pairs}), sorted({j for _, j in pairs})
-    mask = np.zeros((len(a), len(b)))
-    mask[np.searchsorted(a, [i for i, _ in pairs]), np.searchsorted(b, [j for _, j in pairs])] = 1.0
-    full = bool(mask.all())
-    frames = (shape.robot.body_frame(cover.joints[a[0]]), shape.robot.body_frame(cover.joints[b[0]]))
-    params = [[len(a), len(b), margin], bounding_sphere(cover.centers[a], cover.radii[a]),
-              bounding_sphere(cover.centers[b], cover.radii[b]), [float(full)],
-              np.c_[cover.centers[a], cover.radii[a]].ravel(), np.c_[cover.centers[b], cover.radii[b]].ravel(),
-              [] if full else mask.ravel()]
-    return Block(SPHERES, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR,
-                 scratch=max(18, 3 * len(b)))
-
-
-def _solids_block(shape: RobotShape, cover: SphereCover, spheres: list[int], solid: np.ndarray, margin: float,
-                  solid_frame: str | None) -> Block:
-    """One ``SOLIDS`` block: the cover's ``spheres`` (all on one body) against ``solid`` (16 parameters), fixed in
-    the world or on ``solid_frame``."""
-    body = shape.robot.body_frame(cover.joints[spheres[0]])
-    frames = (body,) if solid_frame is None else (body, solid_frame)
-    params = [solid, [margin, len(spheres)], bounding_sphere(cover.centers[spheres], cover.radii[spheres]),
-              np.c_[cover.centers[spheres], cover.radii[spheres]].ravel()]
-    return Block(SOLIDS, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR)
+def _body_frames(shape: RobotShape, cover: SphereCover, pair: tuple[int, int]) -> tuple[str, str]:
+    """The frames of the bodies carrying the cover's spheres ``pair``."""
+    return shape.robot.body_frame(cover.joints[pair[0]]), shape.robot.body_frame(cover.joints[pair[1]])
 
 
 def _margin(value: float, what: str) -> float:
@@ -396,11 +155,12 @@ def _self_blocks(shape: RobotShape, cover: SphereCover, margin: float, name: str
             for j in spheres.get(b, ()):
                 pair = (i, j) if joints[i] <= joints[j] else (j, i)
                 sphere_pairs.setdefault((int(joints[pair[0]]), int(joints[pair[1]])), []).append(pair)
-    blocks = [_spheres_block(shape, cover, pairs, margin) for pairs in sphere_pairs.values()]
+    blocks = [spheres_block(_body_frames(shape, cover, pairs[0]), cover, pairs, margin) for pairs in sphere_pairs.values()]
     for (geometry_name, _), ks in solid_sides.items():
         joint, placement, solid, _ = solids[geometry_name]
-        blocks.append(_solids_block(shape, cover, sorted(ks), solid, margin,
-                                    _geometry_frame(shape, geometry_name, joint, placement)))
+        ks = sorted(ks)
+        frames = (shape.robot.body_frame(cover.joints[ks[0]]), _geometry_frame(shape, geometry_name, joint, placement))
+        blocks.append(solids_block(frames, cover, ks, solid, margin))
     if not blocks:
         raise TaskError(f"{name}: no pair of links to keep apart "
                         f"({len(shape.geometry.geometryObjects)} geometries)")
@@ -479,8 +239,8 @@ class Obstacles(Term):
         for k, joint in enumerate(self.cover.joints):
             if joint != 0:  # fixed to the world: where the user placed it
                 bodies.setdefault(int(joint), []).append(k)
-        blocks = [_solids_block(self.shape, self.cover, ks, solid, self.margin, None)
-                  for ks in bodies.values() for solid in self.scene.solids()]
+        blocks = [solids_block((self.shape.robot.body_frame(self.cover.joints[ks[0]]),), self.cover, ks, solid,
+                               self.margin) for ks in bodies.values() for solid in self.scene.solids()]
         if not blocks:
             raise TaskError(f"{self.name}: no moving sphere of the robot to keep clear")
         return tuple(blocks)

@@ -6,7 +6,7 @@ A solid's row ``(16,)``: its code (:data:`SPHERE`, :data:`BOX`, :data:`CAPSULE`,
 half sides; a capsule's radius and half length along its z axis; nothing for a half-space (the solid
 ``q_z <= 0`` of the point ``q = Rᵀ(point − c)`` in the solid's frame). Obstacles (:mod:`framework.geometry.scene`), links'
 own boxes and capsules (:meth:`framework.geometry.collision.RobotShape.solids`), the ``SOLIDS`` blocks of the collision terms
-(:mod:`framework.costs.collision_blocks`) and the exact check's broad phase (:mod:`framework.geometry.broad_phase`) all
+(:mod:`framework.costs.sphere_rows`) and the exact check's broad phase (:mod:`framework.geometry.broad_phase`) all
 read this one definition.
 """
 
