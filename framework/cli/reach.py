@@ -22,6 +22,8 @@ def add_reach_command(sub: argparse._SubParsersAction) -> None:
     reach.add_argument("--voxel", type=float, default=0.1, help="voxel edge [m] (default 0.1)")
     reach.add_argument("--orientations", type=int, default=0,
                        help="random orientations tried per voxel (default 0: the position alone)")
+    reach.add_argument("--self-collision", action="store_true",
+                       help="reach only without contact between the robot's own links (coal decides)")
     reach.add_argument("--out", type=Path, help="write the map (.npz)")
     reach.add_argument("--png", type=Path, help="draw the horizontal slice that reaches most (.png)")
     reach.add_argument("--record", type=Path, metavar="FILE.rrd", help="the map as a rerun point cloud")
@@ -97,10 +99,17 @@ def reach_command(args, console: Console) -> int:
         _print_ranking(console, placements)
         return EXIT_OK
     frame = args.frame or robot.end_effectors[0]
+    collisions = None
+    if args.self_collision:
+        from ..costs import SelfCollision
+        from ..geometry.collision import RobotShape
+
+        collisions = SelfCollision(RobotShape(robot))
     result = reachability_map(robot, frame, voxel=args.voxel, orientations=args.orientations, seed=args.seed,
-                              progress=progress, scheduler=args.scheduler)
+                              progress=progress, scheduler=args.scheduler, collisions=collisions)
     reached = result.fraction > 0
-    console.print(f"{robot.name}, frame {frame}: {len(result.centers)} voxels of {args.voxel:g} m, "
+    console.print(f"{robot.name}, frame {frame}{' clear of itself' if collisions else ''}: "
+                  f"{len(result.centers)} voxels of {args.voxel:g} m, "
                   f"{reached.sum()} reach something, mean fraction {result.fraction[reached].mean():.3f} there"
                   if reached.any() else f"{robot.name}, frame {frame}: no voxel reached")
     if args.out:

@@ -25,7 +25,7 @@ import pinocchio as pin
 from ..solvers.batch import solve_batch
 from ..solvers.settings import DEFAULTS, MAPS, PLACEMENT
 from ..solvers.solve import IKResult, solve
-from ..costs import Motion, Pose, Position
+from ..costs import Motion, Objective, Pose, Position, Term
 from ..errors import ConfigurationError, TaskError
 from ..model.loading import robot_from_urdf
 from ..costs.problem import Problem
@@ -133,13 +133,17 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
                      solver: str = MAPS.solver, tolerance: float = MAPS.tolerance,
                      time_budget: float | None = MAPS.time_budget, max_iterations: int | None = MAPS.max_iterations,
                      options: Mapping[str, Any] | None = MAPS.options, workers: int | None = None,
-                     progress: bool | None = None, scheduler: str | None = None) -> ReachabilityMap:
+                     progress: bool | None = None, scheduler: str | None = None,
+                     collisions: Term | Objective | None = None) -> ReachabilityMap:
     """The capability map of ``frame``: voxels of edge ``voxel`` [m] over ``box`` (``(lower, upper)`` corners
     [m, world]; default: the bounding box of 2,000 random configurations' frame positions), each tried with
     ``orientations`` random rotations (0: the position alone), solved as :func:`~framework.solve_batch` solves
     (``seed``, ``solver``, ``tolerance``, ``time_budget``, ``max_iterations``, ``options`` per voxel and rotation;
-    defaults :data:`~framework.solvers.settings.MAPS`; on a Dask cluster with ``scheduler``)."""
+    defaults :data:`~framework.solvers.settings.MAPS`; on a Dask cluster with ``scheduler``). ``collisions``:
+    collision terms every solve keeps (``SelfCollision(shape)``, ``Obstacles(shape, scene)`` or their sum); a voxel
+    is then reached only by configurations without contact on the exact geometry."""
     robot.frame_id(frame)
+    extra = _collision_terms(collisions)
     if not (np.isfinite(voxel) and voxel > 0):
         raise TaskError(f"voxel must be a positive length [m]; got {voxel!r}")
     if isinstance(orientations, bool) or not isinstance(orientations, (int, np.integer)) or orientations < 0:
@@ -161,9 +165,9 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
         T[..., :3, :3] = rotations[None]
         T[..., :3, 3] = centers[:, None]
         T[..., 3, 3] = 1.0
-        problem, targets = Problem(robot, Pose(frame, T[0, 0])), T.reshape(-1, 4, 4)
+        problem, targets = Problem(robot, Pose(frame, T[0, 0]) + extra), T.reshape(-1, 4, 4)
     else:
-        problem, targets = Problem(robot, Position(frame, centers[0])), centers
+        problem, targets = Problem(robot, Position(frame, centers[0]) + extra), centers
     result = solve_batch(problem, targets, solver, seed=seed, tolerance=tolerance, time_budget=time_budget,
                          max_iterations=max_iterations, options=options, workers=workers, progress=progress,
                          scheduler=scheduler)
@@ -175,6 +179,18 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
     counts = reached.sum(axis=1)
     mean = np.divide(measure.reshape(V, O).sum(axis=1), counts, out=np.zeros(V), where=counts > 0)
     return ReachabilityMap(robot.name, frame, centers, float(voxel), shape, rotations, reached, mean)
+
+
+def _collision_terms(collisions: Term | Objective | None) -> Objective:
+    """The map's collision terms as an objective (empty: none), checked to be collision terms."""
+    if collisions is None:
+        return Objective(())
+    extra = collisions if isinstance(collisions, Objective) else \
+        Objective(((1.0, collisions),)) if isinstance(collisions, Term) else None
+    if extra is None or not extra.terms or not all(t.checks_collisions for _, t in extra):
+        raise TaskError("collisions must be collision terms (SelfCollision, Obstacles or their sum); got "
+                        f"{collisions!r}")
+    return extra
 
 
 @dataclass(frozen=True)
