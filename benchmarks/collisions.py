@@ -26,6 +26,9 @@ the sphere rows, fatter than the links, kept it from the task).
 (c) Paper 000's circular path tracked with and without a table placed where the unconstrained solution's platform
 stands (``tasks/paper000_circular_table.toml``): points in contact, by coal.
 
+(d) Everywhere else: ``solve_batch`` over the targets of (a) and (b), paper 000's circle with ``SelfCollision``,
+and capability maps (``reachability_map(..., collisions=SelfCollision(shape))``), with and without the terms.
+
     python benchmarks/collisions.py [--targets 100]
 
 Writes docs/results/collisions.md.
@@ -160,7 +163,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
             result, seconds = _timed(problem, k)
             rows.append((*_strictly(problem, result, shape, None), seconds, _on_hulls(result)))
     paper = [_row("paper 000 targets, unconstrained", rows_free), _row("paper 000 targets, SelfCollision", rows_coll)]
-    kept_free, kept_coll, kept_drawn, left, tries, build = [], [], [], [], 0, []
+    kept_free, kept_coll, kept_drawn, left, tries, build, kept_targets = [], [], [], [], 0, [], []
     while len(kept_coll) < count and tries < 200 * count:
         tries += 1
         x = robot.random_configurations(rng, 1)[0]
@@ -174,6 +177,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
         if clear:  # the unconstrained optimum is collision-free: not a target that tests the terms
             continue
         kept_free.append((within, clear, seconds, _on_hulls(result)))
+        kept_targets.append((t1, t2))
         build += timing
         result, seconds = _timed(coll, tries)
         kept_coll.append((*_strictly(coll, result, shape, None), seconds, _on_hulls(result)))
@@ -197,6 +201,7 @@ def youbot(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
               _by_basin(kept_free, kept_coll, kept_drawn, left)]
     free, coll = problems(np.zeros(3), np.zeros(3))
     stats = {"shape": shape, "robot": robot, "free": free, "coll": coll, "blocks": len(coll.program.task_blocks),
+             "targets": kept_targets, "problems": problems,
              "spheres": len(shape.cover().radii), "pairs": len(shape.pairs)}
     return lines, stats
 
@@ -246,7 +251,8 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                    "coll": fw.Problem(robot, fw.Pose(PR2_HANDS[0], targets[0][0]) + 0.1 * fw.Motion("all", rest)
                                       + collision),
                    "blocks": len(fw.Problem(robot, collision).program.task_blocks), "spheres": len(shape.cover().radii),
-                   "pairs": len(shape.pairs)}
+                   "pairs": len(shape.pairs), "targets": targets, "shape": shape, "scene": scene, "rest": rest,
+                   "collision": collision}
 
 
 def tracking() -> list[str]:
@@ -315,6 +321,104 @@ def population_costs(setups: list[tuple[str, dict]], rng: np.random.Generator) -
     return lines
 
 
+def _batch_row(label: str, problem: fw.Problem, targets: dict, shape: fw.RobotShape, scene: fw.Scene | None,
+               reference: float | None) -> tuple[str, float]:
+    """One row of the batch table: the fastest of three ``solve_batch`` runs (after one that loads the compiled
+    code), its items' task and contact checked here."""
+    fw.solve_batch(problem, {k: v[:2] for k, v in targets.items()}, tolerance=TOLERANCE, progress=False)
+    best, result = np.inf, None
+    for _ in range(3):
+        t = time.perf_counter()
+        result = fw.solve_batch(problem, targets, tolerance=TOLERANCE, progress=False)
+        best = min(best, time.perf_counter() - t)
+    B = len(result.success)
+    task = [k for k, name in enumerate(result.error_names) if "collision" not in name and "obstacles" not in name]
+    within = np.all(result.errors[:, task] <= TOLERANCE, axis=1)
+    clear = np.array([not shape.check(x, scene=scene, distances=False).colliding for x in result.configurations])
+    rate = B / best
+    ratio = "" if reference is None else f"{rate / reference:.2f}"
+    return (f"| {label} | {B} | {100 * within.mean():.1f} | {100 * clear.mean():.1f} | "
+            f"{100 * (within & clear).mean():.1f} | {rate:,.0f} | {ratio} |"), rate
+
+
+def _path_variant(text: str, keep: tuple[str, ...]) -> str:
+    """``tasks/paper000_circular_table.toml`` with only the collision terms in ``keep`` (``"obstacles"``,
+    ``"self_collision"``); its table goes with the obstacles term."""
+    parts = text.split("\n\n")
+    out = [part for part in parts
+           if not (part.startswith("[[obstacles]]") and "obstacles" not in keep)
+           and not any(f'type = "{kind}"' in part for kind in ("obstacles", "self_collision") if kind not in keep)]
+    return "\n\n".join(out)
+
+
+def everywhere_else(yb: dict, pr: dict) -> list[str]:
+    """Batches (``solve_batch`` on every core, the kept targets above), paper 000's 200-point circle, and
+    capability maps, each with and without the collision terms on the same inputs in the same run. Success as
+    above (the task within 1e-6 and no contact by coal, whatever terms the solve had)."""
+    import tempfile
+
+    from framework.reach.capability import reachability_map
+    from framework.tracking import track
+
+    lines = ["| batch | items | task met % | no contact % | success % (both) | IK/s | with / without |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    T1, T2 = (np.array([pair[k] for pair in yb["targets"]]) for k in (0, 1))
+    free, coll = yb["problems"](T1[0], T2[0])
+    targets = {"e_t1": T1, "e_t2": T2}
+    row, rate = _batch_row("youBot, unconstrained", free, targets, yb["shape"], None, None)
+    lines += [row, _batch_row("youBot, SelfCollision", coll, targets, yb["shape"], None, rate)[0]]
+    A, B = pr["targets"][0]
+    objective = fw.Pose(PR2_HANDS[0], A, name="left") + fw.Pose(PR2_HANDS[1], B, name="right") \
+        + 0.1 * fw.Motion("all", pr["rest"])
+    targets = {"left": [a for a, _ in pr["targets"]], "right": [b for _, b in pr["targets"]]}
+    row, rate = _batch_row("PR2, unconstrained", fw.Problem(pr["robot"], objective), targets, pr["shape"],
+                           pr["scene"], None)
+    lines += [row, _batch_row("PR2, SelfCollision + Obstacles(table)", fw.Problem(pr["robot"], objective
+                                                                                   + pr["collision"]),
+                              targets, pr["shape"], pr["scene"], rate)[0]]
+    lines += ["", "| paper 000's circle (200 points, hybrid) | points in self-contact | points in contact with the "
+              "table | points within 1e-6 m | ms | with / without |", "|---|---:|---:|---:|---:|---:|"]
+    text = (report.ROOT / "tasks" / "paper000_circular_table.toml").read_text()
+    shape = fw.RobotShape(load_task(report.ROOT / "tasks" / "paper000_circular_table.toml").robot)
+    table = load_task(report.ROOT / "tasks" / "paper000_circular_table.toml").scene
+    plain_ms = None
+    with tempfile.TemporaryDirectory() as folder:
+        for label, keep in (("unconstrained", ()), ("SelfCollision", ("self_collision",)),
+                            ("SelfCollision + Obstacles(table)", ("self_collision", "obstacles"))):
+            path = Path(folder) / f"circle_{len(keep)}.toml"
+            path.write_text(_path_variant(text, keep))
+            warm = load_task(path, points=5).cases[0]
+            track(warm.problem.robot, warm.trajectory, warm.builder, initial=warm.initial, tolerance=TOLERANCE)
+            task = load_task(path)
+            case = task.cases[0]
+            best = np.inf
+            for _ in range(2):
+                t = time.perf_counter()
+                result = track(task.robot, case.trajectory, case.builder, initial=case.initial, tolerance=TOLERANCE)
+                best = min(best, time.perf_counter() - t)
+            Q = result.configurations
+            itself = sum(shape.check(q, distances=False).colliding for q in Q)
+            on_table = sum(shape.check(q, scene=table, self_pairs=False, distances=False).colliding for q in Q)
+            plain_ms = plain_ms or 1e3 * best
+            lines.append(f"| {label} | {itself} | {on_table} | {int((result.position_error <= TOLERANCE).sum())} | "
+                         f"{1e3 * best:.0f} | {1e3 * best / plain_ms:.2f} |")
+    lines += ["", "| capability map (positions, voxel) | voxels | reached without | reached with SelfCollision | "
+              "s without | s with | with / without |", "|---|---:|---:|---:|---:|---:|---:|"]
+    arm = fw.load_robot("youbot_arm")
+    for name, robot, frame, shape, voxel in (("youBot arm ee", arm, "ee", fw.RobotShape(arm), 0.05),
+                                             ("PR2 left gripper", pr["robot"], PR2_HANDS[0], pr["shape"], 0.1)):
+        maps, seconds = [], []
+        for collisions in (None, fw.SelfCollision(shape)):
+            reachability_map(robot, frame, voxel=0.5, collisions=collisions, progress=False)  # compiled code loaded
+            t = time.perf_counter()
+            maps.append(reachability_map(robot, frame, voxel=voxel, collisions=collisions, progress=False))
+            seconds.append(time.perf_counter() - t)
+        lines.append(f"| {name} ({voxel} m) | {len(maps[0].centers)} | {int(maps[0].reached.sum())} | "
+                     f"{int(maps[1].reached.sum())} | {seconds[0]:.1f} | {seconds[1]:.1f} | "
+                     f"{seconds[1] / seconds[0]:.2f} |")
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--targets", type=int, default=100)
@@ -326,12 +430,15 @@ def main() -> None:
     pr2_lines, pr2_setup = pr2(args.targets, rng)
     tracking_lines = tracking()
     cost_lines = population_costs([("youBot dual mobile", youbot_setup), ("PR2 + table", pr2_setup)], rng)
+    else_lines = everywhere_else(youbot_setup, pr2_setup)
     after = report.load()
     paragraphs = __doc__.split("\n\n")
     body = "\n".join(["\n\n".join(paragraphs[1:6]), "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
                       "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
                       "## (c) Tracking paper 000's circle around a table", "", tracking.__doc__, "", *tracking_lines, "",
-                      "## Population cost of the collision terms", "", population_costs.__doc__, "", *cost_lines])
+                      "## Population cost of the collision terms", "", population_costs.__doc__, "", *cost_lines, "",
+                      "## (d) Batches, a path and capability maps", "", " ".join(everywhere_else.__doc__.split()), "",
+                      *else_lines])
     print(body)
     report.write(args.out, "Collision-aware IK: success without collision, and its cost", body, loads=(before, after))
 
