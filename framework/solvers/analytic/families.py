@@ -28,8 +28,27 @@ import numpy as np
 
 from ...compiled.native import compiled, internal
 from ...model.rotations import pack_transform
-from .subproblems import (add, branches, column, cross, dot, norm, rotate, rotate_cs, row, scale, sp1, sp1_cs, sp2, sp3,
-                          sp3_cs, sp4, sp4_cs, sub, times)
+from .subproblems import (
+    add,
+    branches,
+    column,
+    cross,
+    dot,
+    norm,
+    rotate,
+    rotate_cs,
+    row,
+    scale,
+    sp1,
+    sp1_cs,
+    sp2,
+    sp3,
+    sp3_cs,
+    sp4,
+    sp4_cs,
+    sub,
+    times,
+)
 
 WRIST_PARALLEL, WRIST_CROSSING, THREE_PARALLEL, FIVE_PARALLEL = 1, 2, 3, 4
 #: Solutions of one pose before 2π copies: at most 8.
@@ -56,10 +75,11 @@ def _unit_across(a, b):
 
 
 @internal
-def _wrist(H, RG, q1, cs1, q2, cs2, q3, cs3, reference, out, n):
+def _wrist(H, RG, q1, cs1, q2, cs2, q3, cs3, reference, out, trig, n):
     """Append to ``out[n:]`` the solutions ``(q1, q2, q3, q4, q5, q6)`` of the wrist rotation ``R123ᵀ R_G``: q4, q5
-    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6; returns the new count (``csN``: the
-    cosine and sine of ``qN``)."""
+    by sp2 on axis 6's direction, q6 by sp1 on a direction across axis 6, and their cosines and sines to
+    ``trig[n:]`` (``cos q1, sin q1, ..., cos q6, sin q6``: the check by forward kinematics reads them); returns the
+    new count (``csN``: the cosine and sine of ``qN``)."""
     h1, h2, h3, h4, h5, h6 = row(H, 0), row(H, 1), row(H, 2), row(H, 3), row(H, 4), row(H, 5)
 
     def undo(v):  # R123ᵀ v
@@ -73,14 +93,17 @@ def _wrist(H, RG, q1, cs1, q2, cs2, q3, cs3, reference, out, n):
     for j in range(branches(count)):
         t, c4, s4 = (ta, ca, sa) if j == 0 else (tb, cb, sb)  # rot(h4, -t4) is rot(h4, t): t4 = -t
         t5, c5, s5 = sp1_cs(h6, rotate_cs(h4, c4, s4, target), h5, reference[4])
-        t6 = sp1(across, rotate_cs(h5, c5, -s5, rotate_cs(h4, c4, s4, seen)), h6, reference[5])
+        t6, c6, s6 = sp1_cs(across, rotate_cs(h5, c5, -s5, rotate_cs(h4, c4, s4, seen)), h6, reference[5])
         out[n, 0], out[n, 1], out[n, 2], out[n, 3], out[n, 4], out[n, 5] = q1, q2, q3, -t, t5, t6
+        trig[n, 0], trig[n, 1], trig[n, 2], trig[n, 3], trig[n, 4], trig[n, 5] = cs1[0], cs1[1], cs2[0], cs2[1], \
+            cs3[0], cs3[1]
+        trig[n, 6], trig[n, 7], trig[n, 8], trig[n, 9], trig[n, 10], trig[n, 11] = c4, -s4, c5, s5, c6, s6
         n += 1
     return n
 
 
 @internal
-def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
+def _spherical_wrist(code, H, P, c, RG, tG, reference, out, trig):
     """The solutions of the spherical-wrist families (see the module docstring); returns their count."""
     h1, h2, h3 = row(H, 0), row(H, 1), row(H, 2)
     p1, p2, p3 = row(P, 0), row(P, 1), row(P, 2)
@@ -96,7 +119,7 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
                 q3, c3, s3 = (a, ca, sa) if j == 0 else (b, cb, sb)
                 y3 = add(rotate_cs(h3, c3, s3, sub(c, p3)), p3)
                 q2, c2, s2 = sp1_cs(sub(y3, p2), sub(w1, p2), h2, reference[1])
-                n = _wrist(H, RG, -u, (cu, -su), q2, (c2, s2), q3, (c3, s3), reference, out, n)
+                n = _wrist(H, RG, -u, (cu, -su), q2, (c2, s2), q3, (c3, s3), reference, out, trig, n)
     else:  # WRIST_CROSSING: axes 1 and 2 meet at P[0] (the caller put the meeting point there)
         count3, a, ca, sa, b, cb, sb = sp3_cs(sub(c, p3), sub(p1, p3), h3, norm(sub(w, p1)), reference[2])
         for j in range(branches(count3)):
@@ -106,7 +129,7 @@ def _spherical_wrist(code, H, P, c, RG, tG, reference, out):
             for i in range(branches(count12)):
                 q1, q2 = (s1, s2) if i == 0 else (t1, t2)
                 n = _wrist(H, RG, q1, (np.cos(q1), np.sin(q1)), q2, (np.cos(q2), np.sin(q2)), q3, (c3, s3),
-                           reference, out, n)
+                           reference, out, trig, n)
     return n
 
 
@@ -178,12 +201,13 @@ def _five_parallel(H, P, RG, tG, reference, out):
 
 
 @internal
-def _pose_error(H, P, M, T, q):
-    """``max(‖Δt‖ [m], ‖Δω‖ [rad])`` between ``e^{ξ1 q1} ... e^{ξ6 q6} M`` and ``T`` ``(3, 4)``."""
+def _pose_error(H, P, M, T, trig):
+    """``max(‖Δt‖ [m], ‖Δω‖ [rad])`` between ``e^{ξ1 q1} ... e^{ξ6 q6} M`` and ``T`` ``(3, 4)``, from the angles'
+    cosines and sines ``trig`` ``(12,)`` (``cos q1, sin q1, ...``)."""
     r0, r1, r2, t = column(M, 0), column(M, 1), column(M, 2), column(M, 3)
     for i in range(5, -1, -1):
         h, p = row(H, i), row(P, i)
-        cs, sn = np.cos(q[i]), np.sin(q[i])
+        cs, sn = trig[2 * i], trig[2 * i + 1]
         r0, r1, r2 = rotate_cs(h, cs, sn, r0), rotate_cs(h, cs, sn, r1), rotate_cs(h, cs, sn, r2)
         t = add(rotate_cs(h, cs, sn, sub(t, p)), p)
     c0, c1, c2 = column(T, 0), column(T, 1), column(T, 2)
@@ -216,7 +240,9 @@ def table(axes, points, centre, M, Minv, lower, upper, signs, tool=None) -> np.n
 def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copies):
     """The distinct exact solutions of the pose ``(12,)`` in ``[-π, π]`` into ``raw`` ``(8, 6)`` (the chain's
     coordinates, turned by its signs), each one's count of 2π copies within the limits into ``copies`` (0: not
-    kept: outside the limits, inexact or a repeat); returns how many rows of ``raw`` were filled."""
+    kept: outside the limits, inexact or a repeat); returns how many rows of ``raw`` were filled. (The spherical
+    wrists' subproblems give every angle's cosine and sine: the check by forward kinematics reads those.)"""
+    trig = np.empty((MOST, 12))
     H = chain[AXES:POINTS].reshape((6, 3))
     P = chain[POINTS:CENTRE].reshape((6, 3))
     c = chain[CENTRE:M_AT]
@@ -236,18 +262,20 @@ def _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copie
     RG = (times(T, column(Minv, 0)), times(T, column(Minv, 1)), times(T, column(Minv, 2)))
     tG = add(times(T, column(Minv, 3)), column(T, 3))
     centre = (c[0], c[1], c[2])
-    if code == THREE_PARALLEL:
-        count = _three_parallel(H, P, centre, RG, tG, reference, raw)
-    elif code == FIVE_PARALLEL:
-        count = _five_parallel(H, P, RG, tG, reference, raw)
+    if code == THREE_PARALLEL or code == FIVE_PARALLEL:
+        count = _three_parallel(H, P, centre, RG, tG, reference, raw) if code == THREE_PARALLEL else \
+            _five_parallel(H, P, RG, tG, reference, raw)
+        for s in range(count):
+            for i in range(6):
+                trig[s, 2 * i], trig[s, 2 * i + 1] = np.cos(raw[s, i]), np.sin(raw[s, i])
     else:
-        count = _spherical_wrist(code, H, P, centre, RG, tG, reference, raw)
+        count = _spherical_wrist(code, H, P, centre, RG, tG, reference, raw, trig)
     for s in range(count):
         copies[s] = 0
         for i in range(6):  # into [-π, π]
             raw[s, i] -= 2.0 * np.pi * np.floor((raw[s, i] + np.pi) / (2.0 * np.pi))
         kept = _count_copies(raw[s], lower, upper)
-        if kept == 0 or _pose_error(H, P, M, T, raw[s]) > tolerance:
+        if kept == 0 or _pose_error(H, P, M, T, trig[s]) > tolerance:
             continue
         duplicate = False
         for other in range(s):
@@ -286,26 +314,34 @@ def exact_solutions(code, chain, coordinates, T, x_ref, tolerance):
 
 @internal
 def every_solution(code, chain, coordinates, pose, x_ref, tolerance):
-    """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``: ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits
-    (``chain``: :func:`table`), each with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by
-    forward kinematics), nearest to ``x_ref`` first."""
+    """Every solution of the pose ``(12,)`` (position [m], row-major rotation) as robot configurations ``(k, n)``:
+    ``x_ref`` ``(n,)`` with the chain's ``coordinates`` set, within its limits (``chain``: :func:`table`), each
+    with its 2π copies there, the exact ones only (pose error <= ``tolerance`` by forward kinematics), nearest to
+    ``x_ref`` first."""
     raw = np.empty((MOST, 6))
     copies = np.zeros(MOST, dtype=np.int64)
     count = _base_solutions(code, chain, coordinates, pose, x_ref, tolerance, raw, copies)
     lower, upper, signs = chain[LOWER:UPPER], chain[UPPER:SIGNS], chain[SIGNS:TABLE]
     total = copies.sum()
     found = np.empty((total, 6))
+    distance = np.empty(total)
+    first, counts = np.empty(6), np.empty(6, dtype=np.int64)
     k = 0
     for s in range(count):
-        if copies[s] > 0:
-            _write_copies(raw[s], lower, upper, found, k)
-            k += copies[s]
-    distance = np.empty(total)
-    for m in range(total):
-        d = 0.0
+        if copies[s] == 0:
+            continue
         for i in range(6):
-            d += (signs[i] * found[m, i] - x_ref[coordinates[i]]) ** 2
-        distance[m] = d
+            first[i] = _first_copy(raw[s, i], lower[i])
+            counts[i] = _copies_of(raw[s, i], lower[i], upper[i])
+        for m in range(copies[s]):  # each 2π copy within the limits, and its distance to the reference
+            rest, d = m, 0.0
+            for i in range(6):
+                value = min(upper[i], max(lower[i], first[i] + 2.0 * np.pi * (rest % counts[i])))
+                rest //= counts[i]
+                found[k, i] = value
+                d += (signs[i] * value - x_ref[coordinates[i]]) ** 2
+            distance[k] = d
+            k += 1
     order = np.argsort(distance)
     out = np.empty((total, x_ref.shape[0]))
     for m in range(total):
@@ -403,19 +439,3 @@ def _count_copies(q, lower, upper):
     for i in range(6):
         total *= _copies_of(q[i], lower[i], upper[i])
     return total
-
-
-@internal
-def _write_copies(q, lower, upper, out, at):
-    """Write the 2π copies of ``q`` within the limits into ``out[at:]`` (as many as :func:`_count_copies`)."""
-    counts = np.empty(6, dtype=np.int64)
-    total = 1
-    for i in range(6):
-        counts[i] = _copies_of(q[i], lower[i], upper[i])
-        total *= counts[i]
-    for m in range(total):
-        rest = m
-        for i in range(6):
-            value = _first_copy(q[i], lower[i]) + 2.0 * np.pi * (rest % counts[i])
-            out[at + m, i] = min(upper[i], max(lower[i], value))
-            rest //= counts[i]
