@@ -166,7 +166,6 @@ def closest_pair(out, fa, fb, params, p, within, S):
         if np.sqrt((G0 - B0) ** 2 + (G1 - B1) ** 2 + (G2 - B2) ** 2) - RG - RB >= best:
             continue  # every sphere of b is at least this far
         first, last = int(params[q + 4]), int(params[q + 4]) + int(params[q + 5])
-        placed = False
         for h in range(gb):
             qh = qgb + 6 * h
             H0, H1, H2, RH = S[sg + 4 * h], S[sg + 4 * h + 1], S[sg + 4 * h + 2], params[qh + 3]
@@ -177,14 +176,8 @@ def closest_pair(out, fa, fb, params, p, within, S):
                 for j in range(hfirst, hlast):
                     S[3 * j], S[3 * j + 1], S[3 * j + 2] = world_point(out, fb, params, qb + 4 * j)
                 S[sg + 4 * h + 3] = 1.0
-            if not placed:
-                for i in range(first, last):
-                    k = sa + 3 * (i - first)
-                    S[k], S[k + 1], S[k + 2] = world_point(out, fa, params, qa + 4 * i)
-                placed = True
             for i in range(first, last):
-                k = sa + 3 * (i - first)
-                a0, a1, a2 = S[k], S[k + 1], S[k + 2]
+                a0, a1, a2 = world_point(out, fa, params, qa + 4 * i)
                 ra = params[qa + 4 * i + 3]
                 if np.sqrt((a0 - H0) ** 2 + (a1 - H1) ** 2 + (a2 - H2) ** 2) - ra - RH >= best:
                     continue
