@@ -174,9 +174,12 @@ def test_a_batch_with_a_loose_collision_cover_is_solved_as_solve_solves_each_ite
                          + fw.SelfCollision(shape, margin=0.01))
     assert problem.program.loose_hulls and ik_solver("hybrid").clears_first(problem)
     batch = fw.solve_batch(problem, targets, seed=0, progress=False)
+    assert batch.compiled.sum() >= 6  # most answers: the compiled phase without the terms, clear by coal
     term = problem.objective.terms[0][1]
     for i, target in enumerate(targets):
         term.set_target(target)
         one = fw.solve(problem, seed=i)
         np.testing.assert_array_equal(batch.configurations[i], one.configuration)
         assert batch.success[i] == one.success
+        np.testing.assert_allclose(batch.errors[i], [one.errors[name] for name in batch.error_names], atol=1e-15)
+        assert batch.costs[i] == pytest.approx(one.cost, abs=1e-12)

@@ -125,7 +125,9 @@ def solve_batch(
     state = BatchState.start(program, np.tile(plan.x0 if plan else np.zeros(n), (B, 1)) if initial is None
                              else initial)
     with _Bar(progress, B, f"batch IK ({method.name})") as bar:
-        if plan is not None and program.task_rows:
+        if plan is not None and plan.clear_first:
+            done = _clear_first(problem, targets, state, plan, seeds, time_budget, workers, bar)
+        elif plan is not None and program.task_rows:
             done = _engine(problem, P, state, plan, seeds, time_budget, workers, bar)
         else:
             done = np.zeros(B, dtype=bool)
@@ -162,6 +164,35 @@ def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan,
 
     in_chunks(chunk, len(seeds), workers=workers, progress=bar.advance_compiled)
     return (state.codes == REACHED) | (state.codes == DEADLINE) | (not plan.escalates)
+
+
+def _clear_first(problem: Problem, targets, state: BatchState, plan: BatchPlan, seeds: np.ndarray,
+                 time_budget: float | None, workers: int | None, bar: _Bar) -> np.ndarray:
+    """The plan's engine phase on the problem without its collision terms (the same terms: their targets move
+    on both), an item finished when coal finds its answer clear by the terms' margins — as the solver's first
+    step takes it, with the whole problem's errors and values there. Returns ``(B,)`` which items are finished."""
+    free = problem.without_collision_terms
+    P, _ = item_parameters(free, targets)
+    first = BatchState.start(free.program, state.X)
+    _engine(free, P, first, plan, seeds, time_budget, workers, bar)
+    done = np.zeros(len(seeds), dtype=bool)
+    for i in np.flatnonzero(first.codes == REACHED):
+        done[i] = not problem.collisions(first.X[i], margins=True).colliding
+    if done.any():  # the collision blocks' errors and terms' values at x (no target); the others as the engine's
+        X = state.X[done] = first.X[done]
+        state.E[done] = _by_name(problem.program.task_errors(X), problem.program.task_blocks, first.E[done],
+                                 free.program.task_blocks)
+        state.V[done] = _by_name(problem.values(X), problem.names, first.V[done], free.names)
+        state.counts[done], state.codes[done] = first.counts[done], REACHED
+    return done
+
+
+def _by_name(whole: np.ndarray, names, part: np.ndarray, part_names) -> np.ndarray:
+    """``whole`` ``(k, len(names))`` with the columns ``part`` ``(k, len(part_names))`` names in their place."""
+    at = {name: c for c, name in enumerate(names)}
+    for c, name in enumerate(part_names):
+        whole[:, at[name]] = part[:, c]
+    return whole
 
 
 def _on_cluster(problem: Problem, targets, solver, seeds: np.ndarray, initial, options, kwargs: dict,

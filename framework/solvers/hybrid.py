@@ -135,19 +135,18 @@ class Hybrid(IKSolver):
             prepare_closed_form(problem)
 
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
-        """The engine from the warm start (restarts after it only from the box middle); none when a global phase
-        comes first, the weighted sum decides (``priorities`` off with regularizers) or the problem is first
-        solved without its collision terms (:meth:`clears_first`)."""
+        """The engine from the warm start (restarts after it only from the box middle), on the problem without
+        its collision terms when it is first solved so (:meth:`clears_first`); none when a global phase comes
+        first or the weighted sum decides (``priorities`` off with regularizers)."""
         o = self.options
-        if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers) \
-                or self.clears_first(problem):
+        if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers):
             return None
         x0, start = start_configuration(problem, request, o.warm_start, closed_form=False)
         budget = default_iterations(request)
         settings = local_settings(request, o, budget, self._settings)
         report = self._report(start, budget, 0, None, request)
         first = settings if start == "middle" or not o.restarts else self._in_basin(settings)
-        return BatchPlan(x0, first, report=report)
+        return BatchPlan(x0, first, report=report, clear_first=self.clears_first(problem))
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options

@@ -90,6 +90,9 @@ class BatchPlan(NamedTuple):
     first: LocalSettings
     escalates: bool = True
     report: Mapping[str, Any] = {}
+    #: the first descent is on the problem without its collision terms, and an item is finished when coal finds
+    #: its answer clear by the terms' margins (the solver's own first step for a loose sphere cover)
+    clear_first: bool = False
 
 
 @dataclass(frozen=True)

@@ -50,7 +50,7 @@ class Chain:
         solved first without them) or reads what the compiled loop does not (terms without a compiled form)."""
         program = problem.program
         plan = method.batch_plan(problem, request)
-        if plan is None or not program.task_rows or program.layout.generic:
+        if plan is None or plan.clear_first or not program.task_rows or program.layout.generic:
             return None
         P, follows = planned
         return cls(problem, np.ascontiguousarray(P, dtype=float), follows, plan, request, method.name)
