@@ -183,3 +183,29 @@ def test_a_batch_with_a_loose_collision_cover_is_solved_as_solve_solves_each_ite
         assert batch.success[i] == one.success
         np.testing.assert_allclose(batch.errors[i], [one.errors[name] for name in batch.error_names], atol=1e-15)
         assert batch.costs[i] == pytest.approx(one.cost, abs=1e-12)
+
+
+def test_items_the_warm_basin_misses_go_on_from_a_drawn_start_as_solve_does():
+    """The hybrid's next step after the warm start's basin (a drawn start, the item's stream going on) runs in the
+    compiled batch too: every item equals its one-by-one solve, including those answered from a drawn start."""
+    from framework.solvers import ik_solver
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    shape = fw.RobotShape(robot)
+    rng = np.random.default_rng(5)
+    X = [x for x in robot.random_configurations(rng, 200) if not shape.check(x, distances=False).colliding][:16]
+    T1 = np.array([robot.frame_placement(x, "arm1_ee").translation for x in X])
+    T2 = np.array([robot.frame_placement(x, "arm2_ee").translation for x in X])
+    problem = fw.Problem(robot, fw.Position("arm1_ee", T1[0], name="a") + fw.Position("arm2_ee", T2[0], name="b")
+                         + 0.1 * fw.Motion("all", robot.middle) + fw.SelfCollision(shape, margin=0.005))
+    assert not ik_solver("hybrid").clears_first(problem)
+    batch = fw.solve_batch(problem, {"a": T1, "b": T2}, seed=0, progress=False)
+    drawn = 0
+    for i in range(len(X)):
+        problem.objective.terms[0][1].set_target(T1[i])
+        problem.objective.terms[1][1].set_target(T2[i])
+        one = fw.solve(problem, seed=i)
+        np.testing.assert_array_equal(batch.configurations[i], one.configuration)
+        assert batch.success[i] == one.success and batch.iterations[i] == one.iterations
+        drawn += bool(batch.compiled[i] and one.settings["restart_count"] > 0)
+    assert drawn >= 2  # answered in the compiled batch from a drawn start (the check is not vacuous)

@@ -21,7 +21,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..costs.kernels import NO
 from ..costs.program import Program
 from ..compiled.native import compiled
 from . import regularize as newton_phase
@@ -39,6 +38,7 @@ class BatchSettings(NamedTuple):
     """What every item of a batch is solved with (see :class:`~framework.engine.local.LocalSettings`)."""
 
     restarts: int  # random restarts allowed per item
+    drawn: bool  # each item's first start drawn from its stream, as a restart draws one (its row of X is not read)
     chained: bool  # the items are consecutive waypoints of a path (see :func:`descend`)
     tol_linear: float
     tol_angular: float
@@ -91,7 +91,7 @@ def descend(items, inputs, reference, box, packed, settings, state) -> int:
             for j in range(slots.shape[0]):
                 params[slots[j]] = x[coordinates[j]]
         report = Report(state.E[i], state.V[i], stats)
-        code = reach(x, NO, inputs.streams[i : i + 1], box, packed,
+        code = reach(x, settings.drawn, inputs.streams[i : i + 1], box, packed,
                      ReachSettings(settings.tol_linear, settings.tol_angular, inputs.max_iterations[i], settings.stall,
                                    settings.polish, settings.restarts, deadline), report)
         for k in range(3):
@@ -131,18 +131,19 @@ class BatchState(NamedTuple):
 
 
 def descend_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-                  streams: np.ndarray, *, time_budget: float | None = None) -> None:
+                  streams: np.ndarray, *, time_budget: float | None = None, drawn: bool = False) -> None:
     """Run :func:`descend` over ``items`` in this thread, with its own copy of the program's parameters.
 
-    ``streams`` ``uint64 (B,)``: each item's restart stream (used when ``settings.restarts``); ``time_budget``:
-    seconds per item, counted from its first descent. Threads may run it at once on disjoint items.
+    ``streams`` ``uint64 (B,)``: each item's restart stream (used when ``settings.restarts``, and by a ``drawn``
+    start); ``time_budget``: seconds per item, counted from its first descent. Threads may run it at once on
+    disjoint items.
     """
     items = np.ascontiguousarray(items, dtype=np.int64)
     if time_budget is None:
         budget = np.zeros(state.X.shape[0], dtype=np.int64)
     else:
         budget = np.maximum(int(time_budget * 1e9) - state.spent_ns, 1).astype(np.int64)
-    _descend(program, P, state, items, settings, streams, budget, None)
+    _descend(program, P, state, items, settings, streams, budget, None, drawn)
 
 
 def follow_items(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
@@ -152,17 +153,19 @@ def follow_items(program: Program, P: np.ndarray, state: BatchState, items: np.n
     references_of` the motion terms) written from each waypoint's start; returns how many were solved before the
     first that missed the task (all: ``len(items)``)."""
     items = np.ascontiguousarray(items, dtype=np.int64)
-    return _descend(program, P, state, items, settings, streams, np.zeros(state.X.shape[0], dtype=np.int64), follows)
+    return _descend(program, P, state, items, settings, streams, np.zeros(state.X.shape[0], dtype=np.int64), follows,
+                    False)
 
 
 _NONE = (np.zeros(0, np.int64), np.zeros(0, np.int64))
 
 
 def _descend(program: Program, P: np.ndarray, state: BatchState, items: np.ndarray, settings: LocalSettings,
-             streams: np.ndarray, budget: np.ndarray, follows: tuple[np.ndarray, np.ndarray] | None) -> int:
+             streams: np.ndarray, budget: np.ndarray, follows: tuple[np.ndarray, np.ndarray] | None,
+             drawn: bool) -> int:
     left = np.maximum(settings.max_iterations - state.counts[:, 0], 0).astype(np.int64)
     packed = program.packed._replace(params=program.packed.params.copy())  # the items' targets are written there
-    batch = BatchSettings(settings.max_restarts, follows is not None, settings.tolerance, settings.angular,
+    batch = BatchSettings(settings.max_restarts, drawn, follows is not None, settings.tolerance, settings.angular,
                           settings.stall, settings.polish, bool(settings.regularize and program.has_regularizers),
                           settings.regularize_iterations, settings.smoothing, program.task_rows)
     return descend(items, Items(state.X, P, streams, left, budget), _NONE if follows is None else follows,

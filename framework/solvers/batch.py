@@ -163,6 +163,16 @@ def _engine(problem: Problem, P: np.ndarray, state: BatchState, plan: BatchPlan,
         descend_items(program, P, state, items, plan.first, streams, time_budget=time_budget)
 
     in_chunks(chunk, len(seeds), workers=workers, progress=bar.advance_compiled)
+    missed = np.flatnonzero((state.codes != REACHED) & (state.codes != DEADLINE))
+    if plan.then is not None and missed.size:  # a drawn start, the item's stream going on; its own iterations
+        spent = state.counts[missed].copy()
+        state.counts[missed] = 0
+
+        def drawn(part: np.ndarray) -> None:
+            descend_items(program, P, state, missed[part], plan.then, streams, time_budget=time_budget, drawn=True)
+
+        in_chunks(drawn, missed.size, workers=workers)
+        state.counts[missed] += spent
     return (state.codes == REACHED) | (state.codes == DEADLINE) | (not plan.escalates)
 
 

@@ -93,6 +93,9 @@ class BatchPlan(NamedTuple):
     #: the first descent is on the problem without its collision terms, and an item is finished when coal finds
     #: its answer clear by the terms' margins (the solver's own first step for a loose sphere cover)
     clear_first: bool = False
+    #: when the first descent misses the task: a descent from a start drawn from the item's stream with these
+    #: settings (its restarts), as the solver's next step (none: the solver itself takes the item)
+    then: LocalSettings | None = None
 
 
 @dataclass(frozen=True)
