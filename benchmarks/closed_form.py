@@ -10,7 +10,8 @@ Python call of the library; turning its answer into configurations for the check
 second of a whole batch call over 20,000 poses (the P poses repeated).
 
 - metaik ``fw.analytic_ik``: every solution within the joint limits (2π copies included), checked, sorted by
-  distance to a reference (here the middle of the bounds); ``fw.analytic_ik_batch``: each solution once, on 2
+  distance to a reference (here the middle of the bounds); the same call on a prepared ``fw.AnalyticIK(robot,
+  frame)`` (what ``analytic_ik`` looks up per call; EAIK's robot object is prepared too); ``fw.analytic_ik_batch``: each solution once, on 2
   threads. metaik ``fw.solve`` (hybrid): one solution, by default seeded from the closed form; and the numeric
   engine alone (``options={"closed_form": False}``).
 - EAIK 1.2 (``eaik.IK_HP.HPRobot`` built from the chain's axes and offsets read from the Pinocchio model, its
@@ -144,6 +145,8 @@ def measure(arm: Arm, count: int) -> dict:
     if form.exists:
         methods["metaik analytic_ik"] = (lambda k: fw.analytic_ik(robot, arm.frame, targets[k]),
                                          lambda k, found: found.configurations)
+        ik = fw.AnalyticIK(robot, arm.frame)  # prepared once, as EAIK's robot object is
+        methods["metaik AnalyticIK (prepared)"] = (lambda k: ik(targets[k]), lambda k, found: found.configurations)
     eaik = _eaik(H, P)
     if eaik is not None and len(H) <= 6:
         row["eaik family"] = eaik.getKinematicFamily()

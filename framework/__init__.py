@@ -31,7 +31,7 @@ from .solvers.batch import BatchResult, solve_batch
 from .geometry.collision import CollisionReport, Contact, RobotShape
 from .geometry.scene import Box, Capsule, Mesh, Plane, Prism, Scene, Sphere
 from .solvers import solver_names
-from .solvers.analytic import AnalyticBatch, AnalyticSolutions, ClosedForm, analytic_ik, analytic_ik_batch, closed_form
+from .solvers.analytic import AnalyticBatch, AnalyticIK, AnalyticSolutions, ClosedForm, analytic_ik, analytic_ik_batch, closed_form
 
 __version__ = "0.1.0"
 
@@ -41,6 +41,7 @@ __all__ = [
     "analytic_ik",
     "analytic_ik_batch",
     "AnalyticBatch",
+    "AnalyticIK",
     "closed_form",
     "ConfigurationError",
     "Evaluation",

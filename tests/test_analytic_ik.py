@@ -127,6 +127,7 @@ def test_every_form_of_a_pose_gives_the_same_solutions_and_a_bad_one_says_what_i
     assert len(X) > 0
     for same in (target.homogeneous, (target.translation, target.rotation)):
         assert np.array_equal(fw.analytic_ik(robot, "ee", same).configurations, X)
+    assert np.array_equal(fw.AnalyticIK(robot, "ee")(target).configurations, X)  # prepared: the same call
     sheared = target.homogeneous
     sheared[0, 1] += 0.1
     with pytest.raises(TaskError, match="not a rotation matrix"):
@@ -145,6 +146,8 @@ def test_chains_without_a_closed_form_say_why():
         assert form.family is None and why in form.reason
         with pytest.raises(TaskError, match="no closed form"):
             fw.analytic_ik(robot, robot.end_effectors[0], pin.SE3.Identity())
+        with pytest.raises(TaskError, match="no closed form"):
+            fw.AnalyticIK(robot, robot.end_effectors[0])
 
 
 def test_continuous_joints_get_their_2pi_copies():

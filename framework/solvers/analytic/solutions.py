@@ -56,31 +56,64 @@ def closed_form(robot: Robot, frame: str) -> ClosedForm:
     return robot.derived(_detect, frame)
 
 
-def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None = None,
-                quaternion: str | None = None, tolerance: float = 1e-10) -> AnalyticSolutions:
-    """Every solution of ``frame`` reaching ``pose`` (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``; 4
-    numbers need ``quaternion``), within the joint limits, nearest to ``reference`` ``(n,)`` first (default: the
-    middle of the bounds). A :class:`TaskError` says why when the chain has no closed form."""
-    form, middle = _solvable(robot, frame)
-    x_ref = middle if reference is None else _reference(robot, reference)
-    if not form.free.size:  # a 6R chain: the pose's transform straight to the compiled call (it checks it)
-        T = pose.homogeneous if type(pose) is pin.SE3 else homogeneous(_packed(pose, frame, quaternion))
-        X = exact_solutions(form.code, form.tables[0], form.coordinates, T, x_ref, float(tolerance))
-        if len(X):
-            return AnalyticSolutions(X, form.family)
-    packed = _packed(pose, frame, quaternion)  # (none: a pose that is no transform says why here)
-    X = form.solutions(packed, x_ref, tolerance) if form.free.size else X
-    if len(X):
-        return AnalyticSolutions(X, form.family)
-    if form.free.size:
-        reason = (f"no value of the searched joint, in steps of {STEP} rad from the reference's, has a solution within "
-                  "the limits (the pose may be beyond reach, or reachable between two steps)")
-    else:
+class AnalyticIK:
+    """Every solution of one frame's poses on one robot, prepared once: ``ik = AnalyticIK(robot, frame)``, then
+    ``ik(pose)`` (what :func:`analytic_ik` calls; a call takes microseconds). A :class:`TaskError` says why when
+    the frame's chain has no closed form.
+
+    Attributes:
+        robot, frame: what it solves; form: the chain's :class:`ClosedForm`.
+    """
+
+    def __init__(self, robot: Robot, frame: str):
+        form = closed_form(robot, frame)
+        if not form.exists:
+            raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
+        self.robot, self.frame, self.form = robot, frame, form
+        self._middle = np.array(robot.middle, dtype=float)  # the default reference (never written)
+        self._exact = (form.code, form.tables[0], form.coordinates) if not form.free.size else None
+
+    def __call__(self, pose, *, reference: np.ndarray | None = None, quaternion: str | None = None,
+                 tolerance: float = 1e-10) -> AnalyticSolutions:
+        """Every solution reaching ``pose`` (``pinocchio.SE3``, 4x4 matrix or ``(position, rotation)``; 4 numbers
+        need ``quaternion``) within the joint limits, nearest to ``reference`` ``(n,)`` first (default: the middle
+        of the bounds)."""
+        x_ref = self._middle if reference is None else _reference(self.robot, reference)
+        if self._exact is not None:  # a 6R chain: the pose's transform straight to the compiled call (it checks it)
+            T = pose.homogeneous if type(pose) is pin.SE3 else homogeneous(_packed(pose, self.frame, quaternion))
+            code, table, coordinates = self._exact
+            X = exact_solutions(code, table, coordinates, T, x_ref, float(tolerance))
+            if len(X):
+                return AnalyticSolutions(X, self.form.family)
+        return self._searched_or_none(pose, x_ref, quaternion, tolerance)
+
+    def _searched_or_none(self, pose, x_ref: np.ndarray, quaternion: str | None,
+                          tolerance: float) -> AnalyticSolutions:
+        """A 7R chain's solutions (its joint searched), or none and why."""
+        form = self.form
+        packed = _packed(pose, self.frame, quaternion)  # (a pose that is no transform says why here)
+        if form.free.size:
+            X = form.solutions(packed, x_ref, tolerance)
+            if len(X):
+                return AnalyticSolutions(X, form.family)
+            reason = (f"no value of the searched joint, in steps of {STEP} rad from the reference's, has a solution "
+                      "within the limits (the pose may be beyond reach, or reachable between two steps)")
+            return AnalyticSolutions(X, form.family, reason)
         reason = ("every solution of the pose is outside the joint limits"
                   if len(form.solutions(packed, x_ref, tolerance, limits=False)) else
                   "the pose is beyond the arm's reach (no exact solution" +
                   ("; a five-joint arm takes only some orientations at a point)" if form.first else ")"))
-    return AnalyticSolutions(X, form.family, reason)
+        return AnalyticSolutions(np.zeros((0, self.robot.n)), form.family, reason)
+
+    def __repr__(self) -> str:
+        return f"AnalyticIK({self.robot.name!r}, {self.frame!r}, {self.form.family})"
+
+
+def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None = None,
+                quaternion: str | None = None, tolerance: float = 1e-10) -> AnalyticSolutions:
+    """Every solution of ``frame`` reaching ``pose``: :class:`AnalyticIK` ``(robot, frame)`` (made once per robot
+    and frame) called on it."""
+    return robot.derived(AnalyticIK, frame)(pose, reference=reference, quaternion=quaternion, tolerance=tolerance)
 
 
 def _packed(pose, frame: str, quaternion: str | None) -> np.ndarray:
@@ -130,7 +163,7 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
     from ...costs import Pose
     from ...engine.batch import in_chunks
 
-    form, _ = _solvable(robot, frame)
+    form = robot.derived(AnalyticIK, frame).form
     if form.free.size:
         raise TaskError(f"{frame!r} of {robot.name} is a 7R chain with a searched joint: solve its poses one by one "
                         "(analytic_ik), or lock the joint (load_robot(..., locked={...}))")
@@ -146,20 +179,6 @@ def analytic_ik_batch(robot: Robot, frame: str, poses, *, reference: np.ndarray 
 
     in_chunks(work, len(packed), workers=workers)
     return AnalyticBatch(chain[:, :, form.first:], counts, form.coordinates[form.first:], x_ref)
-
-
-def _solvable(robot: Robot, frame: str) -> tuple[ClosedForm, np.ndarray]:
-    """The closed form of ``frame`` and the default reference (a writable copy of the middle of the bounds, never
-    written), in one look-up made once per robot and frame (a call takes microseconds); or a :class:`TaskError`
-    saying why there is no closed form."""
-    form, middle = robot.derived(_prepared, frame)
-    if not form.exists:
-        raise TaskError(f"{frame!r} of {robot.name} has no closed form here: {form.reason}")
-    return form, middle
-
-
-def _prepared(robot: Robot, frame: str) -> tuple[ClosedForm, np.ndarray]:
-    return closed_form(robot, frame), np.array(robot.middle, dtype=float)
 
 
 def _reference(robot: Robot, reference) -> np.ndarray:
