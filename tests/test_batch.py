@@ -182,7 +182,7 @@ def test_a_batch_with_a_loose_collision_cover_is_solved_as_solve_solves_each_ite
         np.testing.assert_array_equal(batch.configurations[i], one.configuration)
         assert batch.success[i] == one.success
         np.testing.assert_allclose(batch.errors[i], [one.errors[name] for name in batch.error_names], atol=1e-15)
-        assert batch.costs[i] == pytest.approx(one.cost, abs=1e-12)
+        assert batch.costs[i] == pytest.approx(one.cost, abs=1e-12) and batch.iterations[i] == one.iterations
 
 
 def test_items_the_warm_basin_misses_go_on_from_a_drawn_start_as_solve_does():

@@ -137,8 +137,8 @@ class Hybrid(IKSolver):
     def batch_plan(self, problem, request: Request) -> BatchPlan | None:
         """The engine from the warm start in its basin, then (where that misses) from a drawn start with restarts,
         as :meth:`solve` takes them; on the problem without its collision terms when it is first solved so
-        (:meth:`clears_first`: its drawn starts are left to the solver); none when a global phase comes first or
-        the weighted sum decides (``priorities`` off with regularizers)."""
+        (:meth:`clears_first`: the first of its clear tries); none when a global phase comes first or the weighted
+        sum decides (``priorities`` off with regularizers)."""
         o = self.options
         if o.global_iterations or not (problem.priorities or not problem.program.has_regularizers):
             return None
@@ -147,9 +147,8 @@ class Hybrid(IKSolver):
         settings = local_settings(request, o, budget, self._settings)
         report = self._report(start, budget, 0, None, request)
         first = settings if start == "middle" or not o.restarts else self._in_basin(settings)
-        clears = self.clears_first(problem)  # (its next step: drawn starts without the terms, left to the solver)
-        then = settings if first is not settings and not clears else None  # _search: the warm basin, then a draw
-        return BatchPlan(x0, first, report=report, clear_first=clears, then=then)
+        then = settings if first is not settings else None  # _search: the warm basin, then a drawn start
+        return BatchPlan(x0, first, report=report, clear_first=self.clears_first(problem), then=then)
 
     def solve(self, problem, request: Request) -> Outcome:
         o = self.options
