@@ -154,7 +154,7 @@ def closest_pair(out, fa, fb, params, p, within, S):
     qg = qm if full else qm + na * nb
     ga, gb = int(params[qg]), int(params[qg + 1])
     qga, qgb = qg + 2, qg + 2 + 6 * ga
-    sg, sa = 3 * nb, 3 * nb + 4 * gb  # S: b's centres, b's group centres (and a flag: its centres placed), a's
+    sg = 3 * nb  # S: b's centres, then b's group centres (and a flag each: its spheres' centres placed)
     for h in range(gb):
         S[sg + 4 * h], S[sg + 4 * h + 1], S[sg + 4 * h + 2] = world_point(out, fb, params, qgb + 6 * h)
         S[sg + 4 * h + 3] = 0.0
@@ -199,7 +199,7 @@ def pair_scratch(params, p) -> int:
     """The scratch numbers :func:`closest_pair` needs for the ``SPHERES`` block at ``params[p:]``."""
     na, nb = int(params[p]), int(params[p + 1])
     qg = p + 12 + 4 * (na + nb) + (0 if params[p + 11] != 0.0 else na * nb)
-    return 3 * (na + nb) + 4 * int(params[qg + 1])
+    return 3 * nb + 4 * int(params[qg + 1])
 
 
 @internal(inline=True)
@@ -330,7 +330,7 @@ def spheres_block(frames: tuple[str, str], cover: SphereCover, pairs: list[tuple
               np.c_[cover.centers[a], cover.radii[a]].ravel(), np.c_[cover.centers[b], cover.radii[b]].ravel(),
               [] if full else mask.ravel(), [len(groups_a), len(groups_b)], groups_a.ravel(), groups_b.ravel()]
     return Block(SPHERES, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR,
-                 scratch=max(18, 3 * (len(a) + len(b)) + 4 * len(groups_b)))
+                 scratch=max(18, 3 * len(b) + 4 * len(groups_b)))
 
 
 def solids_block(frames: tuple[str, ...], cover: SphereCover, spheres: list[int], solid: np.ndarray,
