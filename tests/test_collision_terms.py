@@ -332,11 +332,14 @@ def test_the_newton_phase_stops_on_an_obstacle_it_starts_clear_of(sphere_arm):
     the forearm's centre turns on a circle with θ1 + θ2, so the obstacle (kept ``margin`` away) allows
     θ1 + θ2 <= s_b = φ − 2 asin((R + ρ + margin) / 2L) on the starts' side, and the closest allowed configuration to
     the motion target q is q's projection on θ1 + θ2 = s_b (closed form). The Newton phase's steps towards q
-    enter the obstacle's row, clear where they start. The motion target itself (the trivial answer) is in it."""
+    enter the obstacle's row, clear where they start. The motion target itself (the trivial answer) is in it.
+    (The rows hold ``CLEARANCE`` beyond the margin: an answer on the boundary is clear by coal.)"""
+    from framework.costs.sphere_rows import CLEARANCE
+
     robot, shape, exact = sphere_arm
     margin, phi, rho = 0.01, 1.5, 0.05
     obstacle = fw.Sphere([L * np.cos(phi), L * np.sin(phi), 0.0], rho)
-    bound = phi - 2 * np.arcsin((R + rho + margin) / (2 * L))
+    bound = phi - 2 * np.arcsin((R + rho + margin + CLEARANCE) / (2 * L))
     for q in ([0.7, 0.6], [0.2, 1.1], [1.0, 0.25]):
         q = np.array(q)
         assert shape.check(q, scene=fw.Scene([obstacle]), self_pairs=False).colliding
@@ -413,3 +416,23 @@ def test_widened_margins_read_the_gap_of_clear_rows_near_contact(rng):
             residuals_at(x, -1, widened, rw, Jw)
             np.testing.assert_allclose(Jw[a], fd, atol=1e-6)
     assert near >= 10
+
+
+def test_answers_held_on_a_contact_at_margin_zero_are_clear_by_the_exact_check():
+    """With the default margin 0, an answer whose collision row is active sits on the contact: the rows hold
+    ``CLEARANCE`` beyond it, so coal finds it clear (held exactly at 0 it read as touching: 2 of these 20 failed)."""
+    from framework.costs.sphere_rows import CLEARANCE
+
+    robot = fw.load_robot("youbot_dual_mobile")
+    shape = fw.RobotShape(robot)
+    X = [x for x in robot.random_configurations(np.random.default_rng(7), 400)
+         if not shape.check(x, distances=False).colliding][:20]
+    P1 = np.array([robot.frame_placement(x, "arm1_ee").translation for x in X])
+    P2 = np.array([robot.frame_placement(x, "arm2_ee").translation for x in X])
+    problem = fw.Problem(robot, fw.Position("arm1_ee", P1[0], name="h1") + fw.Position("arm2_ee", P2[0], name="h2")
+                         + fw.SelfCollision(shape))
+    batch = fw.solve_batch(problem, {"h1": P1, "h2": P2}, progress=False)
+    assert batch.success.all()
+    gaps = np.array([shape.check(x, distances=True).min_distance for x in batch.configurations])
+    assert (gaps >= CLEARANCE - 1e-9).all()
+    assert (gaps <= 2 * CLEARANCE).sum() >= 2  # answers held on a contact: the case this is about

@@ -446,13 +446,16 @@ def test_population_values_equal_a_direct_computation(name, rng, request):
     else:
         robot = fw.load_robot(name)
         shape = fw.RobotShape(robot)
+    from framework.costs.sphere_rows import CLEARANCE
+
     cover = shape.cover()
-    margin = 0.01
+    given = 0.01
+    margin = given + CLEARANCE  # the rows hold this much beyond the margin given
     box = fw.Box([0.3, 0.0, 0.35], [0.3, 0.6, 0.1])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # PR2's shoulder pans: left to the exact check
-        self_term = fw.SelfCollision(shape, margin=margin)
-        values = fw.Problem(robot, self_term + fw.Obstacles(shape, [box], margin=margin)).values(
+        self_term = fw.SelfCollision(shape, margin=given)
+        values = fw.Problem(robot, self_term + fw.Obstacles(shape, [box], margin=given)).values(
             X := robot.random_configurations(rng, 40))
     skipped = shape.inseparable(cover)
     index = {name: [k for k, g in enumerate(cover.geometries) if g == name] for name in set(cover.geometries)}

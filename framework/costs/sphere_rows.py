@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..compiled.native import internal
+from ..geometry.collision import TOUCH
 from ..geometry.solids import solid_distance
 from . import blocks as B
 from .curvature import chain_curvature, projected_curvature
@@ -26,6 +27,10 @@ from .program import Block
 if TYPE_CHECKING:
     from ..geometry.spheres import SphereCover
 from .workspace import RESIDUAL, hinge_row, views
+
+#: Held beyond every row's margin [m]: the exact check reads a pair at exactly its margin as touching (a contact at
+#: margin 0), and an answer held on a contact sits there up to rounding; this far beyond, it is clear by coal.
+CLEARANCE = TOUCH
 
 #: How far beyond its margin [m] a sphere pair still counts as a ``SPHERES`` row's closest (its curvature is asked
 #: where the row is held on its boundary, the gap at the margin up to rounding).
@@ -325,7 +330,7 @@ def spheres_block(frames: tuple[str, str], cover: SphereCover, pairs: list[tuple
     mask = np.zeros((len(a), len(b)))
     mask[[at_a[i] for i, _ in pairs], [at_b[j] for _, j in pairs]] = 1.0
     full = bool(mask.all())
-    params = [[len(a), len(b), margin], bounding_sphere(cover.centers[a], cover.radii[a]),
+    params = [[len(a), len(b), margin + CLEARANCE], bounding_sphere(cover.centers[a], cover.radii[a]),
               bounding_sphere(cover.centers[b], cover.radii[b]), [float(full)],
               np.c_[cover.centers[a], cover.radii[a]].ravel(), np.c_[cover.centers[b], cover.radii[b]].ravel(),
               [] if full else mask.ravel(), [len(groups_a), len(groups_b)], groups_a.ravel(), groups_b.ravel()]
@@ -339,6 +344,6 @@ def solids_block(frames: tuple[str, ...], cover: SphereCover, spheres: list[int]
     against ``solid`` (16 parameters), fixed in the world or on ``frames[1]``."""
     order, groups = sphere_groups(cover.centers[spheres], cover.radii[spheres])
     spheres = [spheres[k] for k in order]
-    params = [solid, [margin, len(spheres)], bounding_sphere(cover.centers[spheres], cover.radii[spheres]),
+    params = [solid, [margin + CLEARANCE, len(spheres)], bounding_sphere(cover.centers[spheres], cover.radii[spheres]),
               np.c_[cover.centers[spheres], cover.radii[spheres]].ravel(), [len(groups)], groups.ravel()]
     return Block(SOLIDS, B.NORM, 1, frames, np.concatenate(params), tolerance=B.TOL_LINEAR)
