@@ -127,7 +127,9 @@ def test_reach_command(tmp_path, capsys):
     assert "clear of itself" in capsys.readouterr().out
     robot = fw.load_robot("youbot_arm")
     clear = reachability_map(robot, "ee", voxel=0.15, collisions=fw.SelfCollision(fw.RobotShape(robot)))
-    np.testing.assert_array_equal(ReachabilityMap.load(out).reached, clear.reached)
+    loaded = ReachabilityMap.load(out)
+    np.testing.assert_array_equal(loaded.reached, clear.reached)
+    assert loaded.clear_of == ("self_collision",) and direct.clear_of == ()
     assert clear.reached.sum() < direct.reached.sum()
     assert main(["reach", "youbot_dual_mobile", "--place", "arm1_ee=1,0.5,0.35", "--place", "arm2_ee=1,0.75,0.35",
                  "--radius", "0.3", "--step", "0.15", "--headings", "4", "--no-progress"]) == EXIT_OK

@@ -108,10 +108,12 @@ def reach_command(args, console: Console) -> int:
     result = reachability_map(robot, frame, voxel=args.voxel, orientations=args.orientations, seed=args.seed,
                               progress=progress, scheduler=args.scheduler, collisions=collisions)
     reached = result.fraction > 0
-    console.print(f"{robot.name}, frame {frame}{' clear of itself' if collisions else ''}: "
-                  f"{len(result.centers)} voxels of {args.voxel:g} m, "
-                  f"{reached.sum()} reach something, mean fraction {result.fraction[reached].mean():.3f} there"
-                  if reached.any() else f"{robot.name}, frame {frame}: no voxel reached")
+    what = f"{robot.name}, frame {frame}{' clear of itself' if collisions else ''}"
+    console.print(f"{what}: {len(result.centers)} voxels of {args.voxel:g} m, {reached.sum()} reach something, "
+                  f"mean fraction {result.fraction[reached].mean():.3f} there" if reached.any() else
+                  f"{what}: no voxel of {len(result.centers)} reached" + (
+                      f" ({args.orientations} random orientations each: a {robot.n}-joint arm may take none of "
+                      "them; try --orientations 0)" if args.orientations and robot.n < 6 else ""))
     if args.out:
         console.print(f"map written to {result.save(args.out)}")
     if args.png:

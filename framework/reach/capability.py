@@ -64,6 +64,8 @@ class ReachabilityMap:
         rotations: ``(O, 3, 3)`` the orientations tried at every voxel (``O = 0``: the position alone).
         reached: ``(V, max(O, 1))`` which were solved.
         manipulability: ``(V,)`` mean ``√det(J Jᵀ)`` over the voxel's solutions (0 where none).
+        clear_of: the collision terms every solve kept (their names, e.g. ``("self_collision",)``; none: contacts
+            allowed).
     """
 
     robot: str
@@ -74,6 +76,7 @@ class ReachabilityMap:
     rotations: np.ndarray
     reached: np.ndarray
     manipulability: np.ndarray
+    clear_of: tuple[str, ...] = ()
 
     @property
     def fraction(self) -> np.ndarray:
@@ -85,7 +88,7 @@ class ReachabilityMap:
         path = Path(path)
         np.savez_compressed(path, robot=self.robot, frame=self.frame, centers=self.centers, voxel=self.voxel,
                             shape=np.array(self.shape), rotations=self.rotations, reached=self.reached,
-                            manipulability=self.manipulability)
+                            manipulability=self.manipulability, clear_of=np.array(self.clear_of, dtype=str))
         return path
 
     @classmethod
@@ -93,7 +96,8 @@ class ReachabilityMap:
         with np.load(path) as data:
             return cls(str(data["robot"]), str(data["frame"]), data["centers"], float(data["voxel"]),
                        tuple(int(v) for v in data["shape"]), data["rotations"], data["reached"],
-                       data["manipulability"])
+                       data["manipulability"],
+                       tuple(str(v) for v in data["clear_of"]) if "clear_of" in data.files else ())
 
     def slice_png(self, path: str | Path, z: float | None = None) -> Path:
         """Draw the horizontal slice nearest height ``z`` (default: the one reaching most) as a PNG."""
@@ -178,7 +182,8 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
         measure[result.success] = manipulability(robot, result.configurations[result.success], frame, rows)
     counts = reached.sum(axis=1)
     mean = np.divide(measure.reshape(V, O).sum(axis=1), counts, out=np.zeros(V), where=counts > 0)
-    return ReachabilityMap(robot.name, frame, centers, float(voxel), shape, rotations, reached, mean)
+    return ReachabilityMap(robot.name, frame, centers, float(voxel), shape, rotations, reached, mean,
+                           tuple(t.name for _, t in extra))
 
 
 def _collision_terms(collisions: Term | Objective | None) -> Objective:

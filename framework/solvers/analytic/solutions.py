@@ -80,7 +80,8 @@ class AnalyticIK:
         of the bounds)."""
         x_ref = self._middle if reference is None else _reference(self.robot, reference)
         if self._exact is not None:  # a 6R chain: the pose's transform straight to the compiled call (it checks it)
-            T = pose.homogeneous if type(pose) is pin.SE3 else homogeneous(_packed(pose, self.frame, quaternion))
+            T = pose.homogeneous if type(pose) is pin.SE3 else pose if _plain_matrix(pose) else \
+                homogeneous(_packed(pose, self.frame, quaternion))
             code, table, coordinates = self._exact
             X = exact_solutions(code, table, coordinates, T, x_ref, float(tolerance))
             if len(X):
@@ -114,6 +115,11 @@ def analytic_ik(robot: Robot, frame: str, pose, *, reference: np.ndarray | None 
     """Every solution of ``frame`` reaching ``pose``: :class:`AnalyticIK` ``(robot, frame)`` (made once per robot
     and frame) called on it."""
     return robot.derived(AnalyticIK, frame)(pose, reference=reference, quaternion=quaternion, tolerance=tolerance)
+
+
+def _plain_matrix(pose) -> bool:
+    """Whether ``pose`` is a 4x4 C-contiguous float array (the compiled call's own type: it checks the values)."""
+    return type(pose) is np.ndarray and pose.shape == (4, 4) and pose.dtype == np.float64 and pose.flags.c_contiguous
 
 
 def _packed(pose, frame: str, quaternion: str | None) -> np.ndarray:
