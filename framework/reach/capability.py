@@ -144,8 +144,9 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
     ``orientations`` random rotations (0: the position alone), solved as :func:`~framework.solve_batch` solves
     (``seed``, ``solver``, ``tolerance``, ``time_budget``, ``max_iterations``, ``options`` per voxel and rotation;
     defaults :data:`~framework.solvers.settings.MAPS`; on a Dask cluster with ``scheduler``). ``collisions``:
-    collision terms every solve keeps (``SelfCollision(shape)``, ``Obstacles(shape, scene)`` or their sum); a voxel
-    is then reached only by configurations without contact on the exact geometry."""
+    collision terms (``SelfCollision(shape)``, ``Obstacles(shape, scene)`` or their sum); a voxel is then reached
+    only by configurations without contact on the exact geometry: the answers of the batch without the terms that
+    coal finds clear, and those it reached in contact solved again with the terms."""
     robot.frame_id(frame)
     extra = _collision_terms(collisions)
     if not (np.isfinite(voxel) and voxel > 0):
@@ -169,21 +170,39 @@ def reachability_map(robot: Robot, frame: str, *, voxel: float = 0.1, orientatio
         T[..., :3, :3] = rotations[None]
         T[..., :3, 3] = centers[:, None]
         T[..., 3, 3] = 1.0
-        problem, targets = Problem(robot, Pose(frame, T[0, 0]) + extra), T.reshape(-1, 4, 4)
+        task, targets = Pose(frame, T[0, 0]), T.reshape(-1, 4, 4)
     else:
-        problem, targets = Problem(robot, Position(frame, centers[0]) + extra), centers
-    result = solve_batch(problem, targets, solver, seed=seed, tolerance=tolerance, time_budget=time_budget,
-                         max_iterations=max_iterations, options=options, workers=workers, progress=progress,
-                         scheduler=scheduler)
-    reached = result.success.reshape(V, O)
+        task, targets = Position(frame, centers[0]), centers
+    success, X = _solved(robot, task, targets, extra, solver, seed, dict(
+        tolerance=tolerance, time_budget=time_budget, max_iterations=max_iterations, options=options,
+        workers=workers, progress=progress, scheduler=scheduler))
+    reached = success.reshape(V, O)
     measure = np.zeros(V * O)
-    if result.success.any():
+    if success.any():
         rows = slice(0, 6) if orientations else slice(0, 3)
-        measure[result.success] = manipulability(robot, result.configurations[result.success], frame, rows)
+        measure[success] = manipulability(robot, X[success], frame, rows)
     counts = reached.sum(axis=1)
     mean = np.divide(measure.reshape(V, O).sum(axis=1), counts, out=np.zeros(V), where=counts > 0)
     return ReachabilityMap(robot.name, frame, centers, float(voxel), shape, rotations, reached, mean,
                            tuple(t.name for _, t in extra))
+
+
+def _solved(robot: Robot, task: Term, targets: np.ndarray, extra: Objective, solver: str, seed: int,
+            batch: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Which of the map's targets are reached, and the configurations: one batch of ``task``; with collision
+    terms (``extra``), its answers that coal finds clear by the terms' margins are kept and only the targets it
+    reached in contact are solved again with the terms (a target missed without them is not tried with them)."""
+    plain = solve_batch(Problem(robot, task), targets, solver, seed=seed, **batch)
+    success, X = plain.success.copy(), plain.configurations.copy()
+    if not extra.terms:
+        return success, X
+    whole = Problem(robot, task + extra)
+    items = np.array([i for i in np.flatnonzero(success) if whole.collisions(X[i], margins=True).colliding],
+                     dtype=np.int64)
+    if items.size:
+        again = solve_batch(whole, targets[items], solver, seed=[seed + int(i) for i in items], **batch)
+        success[items], X[items] = again.success, again.configurations
+    return success, X
 
 
 def _collision_terms(collisions: Term | Objective | None) -> Objective:
