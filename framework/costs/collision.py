@@ -1,11 +1,12 @@
 """Collision avoidance as task terms on sphere covers: hinges on signed distances, zero when clear.
 
 The spheres of a :class:`~framework.geometry.spheres.SphereCover` sit on the bodies (joints) they move with; each pair of
-bodies is one ``SPHERES`` row (:mod:`~framework.costs.sphere_rows`) (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
+bodies is one ``SPHERES`` row (the closest sphere pair, held ``margin`` apart), each body against a box or capsule
 — a link's own (``geometry[name]`` frames) or an obstacle — one ``SOLIDS`` row (the closest sphere's signed
 distance to the solid), so a term has one row per pair of bodies however many spheres cover them, and every
-solver reads them through the one term interface. Links' boxes and capsules are used whole on one side of a pair
-because few spheres cover a flat box badly. They sit at the first priority level with the task: a collision is as wrong as a
+solver reads them through the one term interface (the two row kinds and their kernels:
+:mod:`~framework.costs.sphere_rows`). Links' boxes and capsules are used whole on one side of a pair because few
+spheres cover a flat box badly. They sit at the first priority level with the task: a collision is as wrong as a
 missed target. Each term also has an exact check (:meth:`Term.collisions`, coal on the URDF's geometry), which
 decides a solve's success (not the sphere rows), and its pairs as convex hulls (:meth:`Term.hull_pairs`), on which
 the engine takes its last steps when the fatter spheres keep it from the task.

@@ -23,10 +23,10 @@ from .curvature import chain_curvature, projected_curvature
 from .kinds import BlockKind
 from .lie import on_frame, world_point
 from .program import Block
+from .workspace import RESIDUAL, hinge_row, views
 
 if TYPE_CHECKING:
     from ..geometry.spheres import SphereCover
-from .workspace import RESIDUAL, hinge_row, views
 
 #: Held beyond every row's margin [m]: the exact check reads a pair at exactly its margin as touching (a contact at
 #: margin 0), and an answer held on a contact sits there up to rounding; this far beyond, it is clear by coal.
@@ -104,9 +104,8 @@ def spheres_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, S) ->
     − r_bj − m`` over the block's sphere pairs, and its Jacobian, the closest pair's
     ``uᵀ(J_p,a − J_p,b) + ω_a·(o_a × u) − ω_b·(o_b × u)`` (``o = R c``, the point's offset on its frame).
 
-    Exact with two prunings: bodies whose bounding spheres are ``m`` apart are clear (every pair is at least that
-    far apart), and a sphere of ``a`` farther from ``b``'s bounding sphere than the closest pair found so far
-    is skipped. ``b``'s world centres go to the scratch ``S`` (3 per sphere), each computed once.
+    Exact with prunings: bodies whose bounding spheres are ``m`` apart are clear (every pair is at least that far
+    apart); otherwise :func:`closest_pair` skips groups and spheres by their holding spheres (scratch ``S``).
     """
     na, margin = int(params[p]), params[p + 2]
     A0, A1, A2 = world_point(out, fa, params, p + 3)
@@ -226,7 +225,7 @@ def _solid_point_distance(out, fb, x, y, z, params, p, g) -> float:
 
 
 @internal(inline=True)
-def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g_) -> None:
+def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g) -> None:
     """The ``SOLIDS`` residual: ``min(0, min_k sd(p_a + R_a c_k) − r_k − m)`` for the spheres ``(c_k, r_k)`` on
     frame ``a`` against the solid at ``params[p:p + 16]`` (in the world, or on frame ``b``), and the closest
     sphere's Jacobian ``∇sdᵀ(J_p,a + ω_a × o − J_p,b − ω_b × (s − p_b))`` (``o = R_a c``, ``s`` its centre)."""
@@ -234,18 +233,18 @@ def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g_) ->
     qg = p + 22 + 4 * count  # the groups: their count, then centre, radius, first, count (6 each)
     groups = int(params[qg])
     best, arg, w0, w1, w2 = margin, -1, 0.0, 0.0, 0.0  # only spheres closer than the margin count
-    k, last, g = -1, -1, 0  # k = -1: the bounding sphere; then each group's sphere, and its spheres if it is near
+    k, last, group = -1, -1, 0  # k = -1: the bounding sphere; then each group's sphere, and its spheres if it is near
     while True:  # (one call site of the signed distance: it is inlined)
         if k < 0:
             q = p + 18
         elif k < last:
             q = p + 22 + 4 * k
-        elif g < groups:
-            q = qg + 1 + 6 * g
+        elif group < groups:
+            q = qg + 1 + 6 * group
         else:
             break
         a0, a1, a2 = world_point(out, fa, params, q)
-        d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g_) - params[q + 3]
+        d = _solid_point_distance(out, fb, a0, a1, a2, params, p, g) - params[q + 3]
         if k < 0:
             if d - margin >= 0.0:  # the bounding sphere is clear (sd is 1-Lipschitz): so is every sphere
                 hinge_row(d - margin, r, Jr, row, want_jacobian, n)
@@ -253,12 +252,12 @@ def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g_) ->
             k = last = 0
         elif k < last:
             if d < best:
-                best, arg, w0, w1, w2 = d, k, g_[0], g_[1], g_[2]  # the gradient at the closest sphere's centre
+                best, arg, w0, w1, w2 = d, k, g[0], g[1], g[2]  # the gradient at the closest sphere's centre
             k += 1
         else:  # a group's sphere: its spheres are at least this far
             if d < best:
                 k, last = int(params[q + 4]), int(params[q + 4]) + int(params[q + 5])
-            g += 1
+            group += 1
     if not hinge_row(best - margin, r, Jr, row, want_jacobian, n):
         return
     q = p + 22 + 4 * arg
@@ -274,7 +273,6 @@ def solids_rows(out, Jf, fa, fb, params, p, r, Jr, row, want_jacobian, n, g_) ->
         for i in range(n):
             Jr[row, i] -= (w0 * Jf[fb, 0, i] + w1 * Jf[fb, 1, i] + w2 * Jf[fb, 2, i]
                            + cb0 * Jf[fb, 3, i] + cb1 * Jf[fb, 4, i] + cb2 * Jf[fb, 5, i])
-
 
 
 #: Two bodies kept a margin apart through spheres fixed on them, by the closest pair: ``min(0, min_ij ‖s_ai − s_bj‖

@@ -332,7 +332,7 @@ def every_solution(code, chain, coordinates, pose, x_ref, tolerance):
             continue
         for i in range(6):
             first[i] = _first_copy(raw[s, i], lower[i])
-            counts[i] = _copies_of(raw[s, i], lower[i], upper[i])
+            counts[i] = _copies_from(first[i], upper[i])
         for m in range(copies[s]):  # each 2π copy within the limits, and its distance to the reference
             rest, d = m, 0.0
             for i in range(6):
@@ -449,7 +449,13 @@ def _first_copy(value, lower):
 @internal(inline=True)
 def _copies_of(value, lower, upper):
     """How many 2π copies of one joint's ``value`` lie within ``[lower, upper]`` (0: none)."""
-    return max(0, int(np.floor((upper + 1e-12 - _first_copy(value, lower)) / (2.0 * np.pi))) + 1)
+    return _copies_from(_first_copy(value, lower), upper)
+
+
+@internal(inline=True)
+def _copies_from(first, upper):
+    """How many of ``first + 2πm`` (``m >= 0``; ``first``: :func:`_first_copy`) lie at or below ``upper``."""
+    return max(0, int(np.floor((upper + 1e-12 - first) / (2.0 * np.pi))) + 1)
 
 
 @internal
