@@ -109,7 +109,7 @@ def test_near_pairs_against_every_obstacle_kind(youbot, rng, tmp_path):
     scene = fw.Scene((fw.Box([0.6, 0.0, 0.3], [0.4, 0.6, 0.05], name="table"), fw.Sphere([0.3, 0.4, 0.5], 0.1),
                       fw.Capsule([0.0, -0.5, 0.4], 0.05, 0.4), fw.Plane([0, 0, 0.02], [0, 0, 1]),
                       fw.Mesh(path, center=[0.2, 0.0, 0.7])))
-    geometry, _, obstacles = shape._with_scene(scene)
+    geometry, _, obstacles, _ = shape._with_scene(scene, False)
     assert len(obstacles) == 4  # the mesh is no solid: its bounding sphere
     spheres = shape._bounding_spheres(geometry, obstacles)
     assert spheres.radii.max() > 100  # the plane: a large box under the robot, whose sphere is near every body
@@ -135,3 +135,25 @@ def test_the_broad_phase_leaves_most_pairs_out(pr2, youbot):
     for robot, shape in (pr2, youbot):
         near = bounding_spheres(robot, shape.geometry).near_pairs(robot.middle, 0.0)
         assert near.size < 0.25 * len(shape.pairs), (robot.name, near.size, len(shape.pairs))
+
+
+def test_own_pairs_and_a_scene_checked_in_one_pass_as_each_alone(youbot, rng):
+    """One pass over the robot's own pairs and a scene's, each at its own margin (one broad phase, the geometries
+    placed once): the same contacts as each kind of pair checked alone with distances on every pair (coal, no broad
+    phase); and a problem's exact check of a SelfCollision and an Obstacles term is that union."""
+    robot, shape = youbot
+    scene = fw.Scene((fw.Box([0.5, 0.0, 0.3], [0.3, 0.6, 0.05], name="table"), fw.Sphere([0.2, 0.3, 0.5], 0.1)))
+    X = robot.random_configurations(rng, 40)
+    kinds = set()
+    for x in X:
+        for margin, scene_margin in ((0.0, 0.0), (0.01, 0.04), (0.04, 0.0)):
+            one = shape.check(x, margin, scene, distances=False, scene_margin=scene_margin)
+            alone = {(c.a, c.b) for c in shape.check(x, margin).contacts} \
+                | {(c.a, c.b) for c in shape.check(x, scene_margin, scene, self_pairs=False).contacts}
+            assert {(c.a, c.b) for c in one.contacts} == alone
+            kinds |= {b.startswith("obstacle:") for _, b in alone}
+        problem = fw.Problem(robot, fw.SelfCollision(shape, margin=0.01) + fw.Obstacles(shape, scene, margin=0.04))
+        for margins in (False, True):
+            terms = {(c.a, c.b) for _, t in problem.objective for c in t.collisions(robot, x, margin=margins).contacts}
+            assert {(c.a, c.b) for c in problem.collisions(x, margins=margins).contacts} == terms
+    assert kinds == {False, True}  # random configurations: contacts of both kinds

@@ -49,6 +49,24 @@ def test_task_errors_of_a_population_are_pinocchio_s(robot, rng):
     np.testing.assert_array_equal(problem.program.limits(1e-3, 2e-3), [1e-3, 2e-3])
 
 
+def test_values_and_errors_in_one_pass_equal_the_population_kernels(robot, rng):
+    """One configuration's term values and task errors in one pass (a solve's answer found without its collision
+    terms) equal the population kernels' (each block evaluated on its own), with contact rows in and out of contact."""
+    shape = fw.RobotShape(robot)
+    target = pin.SE3(Rotation.from_rotvec([0.3, -0.2, 0.5]).as_matrix(), np.array([0.5, -0.2, 0.45]))
+    problem = Problem(robot, fw.Pose("arm2_ee", target) + 0.1 * Motion("all", robot.middle)
+                      + fw.SelfCollision(shape, margin=0.01) + fw.Obstacles(shape, [fw.Sphere([0.3, 0.0, 0.4], 0.2)]))
+    X = robot.random_configurations(rng, 60)
+    program = problem.program
+    in_contact = 0
+    for x in X:
+        values, errors = program.values_and_errors(x)
+        np.testing.assert_allclose(values, problem.values(x[None])[0], rtol=1e-13, atol=1e-15)
+        np.testing.assert_allclose(errors, program.task_errors(x), rtol=1e-13, atol=1e-15)
+        in_contact += values[2] > 0
+    assert 0 < in_contact < len(X)
+
+
 def test_relative_position_against_pinocchio(robot, rng):
     X = robot.random_configurations(rng, 100)
     offset = np.array([0.2, -0.3, -0.2])

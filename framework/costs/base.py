@@ -35,6 +35,7 @@ from .program import Block, Program, unique_labels
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..geometry.collision import CollisionReport
+    from ..geometry.exact_check import ExactCheck
     from ..geometry.hulls import HullPair
 
 LEVELS = ("task", "regularizer", "value")
@@ -220,11 +221,16 @@ class Term:
         blocks = self.packed(robot)[0] or ()
         return np.concatenate([b.params for b in blocks], dtype=float, casting="unsafe") if blocks else np.zeros(0)
 
-    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport | None:
-        """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; the
-        collision terms answer with coal on the exact geometry, and a solve is a success only without contacts);
-        with ``margin``, pairs closer than the term's margin count as contacts too."""
+    def exact_check(self) -> ExactCheck | None:
+        """The pairs this term keeps apart, as the exact check reads them (``None``: none; the collision terms
+        answer with coal on the exact geometry, and a solve is a success only without contacts)."""
         return None
+
+    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport | None:
+        """The exact collision check this term stands for at configuration ``x`` ``(n,)`` (``None``: none; see
+        :meth:`exact_check`); with ``margin``, pairs closer than the term's margin count as contacts too."""
+        check = self.exact_check()
+        return None if check is None else check.check(x, margins=margin)
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """The pairs of convex hulls this term keeps apart (:mod:`framework.geometry.hulls`; the collision terms' tighter

@@ -22,7 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import TaskError
-from ..geometry.collision import CollisionReport, RobotShape
+from ..geometry.collision import RobotShape
+from ..geometry.exact_check import ExactCheck
 from ..geometry.hulls import HullPair, moving_loose, obstacle_pairs, self_pairs
 from ..geometry.scene import Scene
 from ..geometry.spheres import SphereCover
@@ -90,10 +91,9 @@ class SelfCollision(Term):
         if robot is not self.shape.robot:
             raise TaskError(f"{self.name} was built for robot {self.shape.robot.name!r}, not this one")
 
-    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport:
-        """The robot's own pairs in contact (closer than the margin, with ``margin``) at ``x`` on the exact
-        geometry (coal's fast check)."""
-        return self.shape.check(x, self.margin if margin else 0.0, distances=False)
+    def exact_check(self) -> ExactCheck:
+        """The robot's own pairs, closer than the margin in contact."""
+        return ExactCheck(self.shape, None, self.margin)
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every checked pair of the robot's own geometries, as convex hulls (those included that the sphere
@@ -209,11 +209,9 @@ class Obstacles(Term):
 
     validate = SelfCollision.validate
 
-    def collisions(self, robot: Robot, x: np.ndarray, *, margin: bool = False) -> CollisionReport:
-        """The moving geometries in contact with the obstacles (closer than the margin, with ``margin``) at
-        ``x``, on the exact geometry (coal's fast check)."""
-        return self.shape.check(x, self.margin if margin else 0.0, scene=self.scene, self_pairs=False,
-                                distances=False)
+    def exact_check(self) -> ExactCheck:
+        """The moving geometries against the obstacles, closer than the margin in contact."""
+        return ExactCheck(self.shape, self.scene, self.margin)
 
     def hull_pairs(self, robot: Robot) -> tuple[HullPair, ...]:
         """Every moving geometry's convex hull against every obstacle."""

@@ -271,6 +271,34 @@ def residuals_at(x, level, packed, r_out, J_out) -> int:
 
 
 @compiled
+def values_and_errors(x, packed, V, errors) -> None:
+    """Unweighted term values ``V (terms,)`` (accumulated: zero it first) and each task block's error ``‖r_b‖``
+    ``errors (blocks,)`` at one configuration ``x (n,)`` (finite): :func:`population_values` and
+    :func:`task_errors_at` in one pass (one FK, each block's residual once; a solve's answer found on another
+    problem, e.g. without its collision terms)."""
+    owners, records = workspaces(packed, x.shape[0], 1)
+    ws = records[0]
+    x = borrow(x)
+    ws.x = x.ctypes.data
+    v, k = views(ws), kinematic_views(ws)
+    fk_one(x, k.joints, k.joint_geometry, k.frame_joints, k.frame_geometry, v.poses, k.placements)
+    ws.mode, ws.row = RESIDUAL, 0
+    t = 0
+    for b in range(v.blocks.shape[0]):
+        block = v.blocks[b]
+        ws.block = b
+        call(block.residual, ws)
+        V[block.term] += rho_value(block.rho, block.scale, v.r, 0, block.rows)
+        if block.level == LEVEL_TASK:
+            s = 0.0
+            for c in range(block.rows):
+                s += v.r[c] * v.r[c]
+            errors[t] = np.sqrt(s)
+            t += 1
+    keep_alive(owners, packed)
+
+
+@compiled
 def task_errors_at(X, packed, errors) -> None:
     """Each task block's error ``‖r_b‖`` [m or rad] at each configuration of ``X`` ``(pop, n)`` into ``errors``
     ``(pop, blocks)``."""

@@ -15,7 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
-from ..geometry.collision import CollisionReport, merge_reports
+from ..geometry.collision import CollisionReport
+from ..geometry.exact_check import CheckGroup, check_all, grouped
 from .base import Objective
 from .program import Program
 from ..errors import TaskError
@@ -177,9 +178,12 @@ class Problem:
         margin count as contacts too."""
         if not self.checks_collisions:
             return None
-        x = self.robot.check_population(x)[0]
-        reports = [t.collisions(self.robot, x, margin=margins) for _, t in self.objective if t.checks_collisions]
-        return reports[0] if len(reports) == 1 else merge_reports(reports)  # one report: merged, it is itself
+        return check_all(self._exact_checks, x, margins=margins)
+
+    @cached_property
+    def _exact_checks(self) -> tuple[CheckGroup, ...]:
+        """The pairs the collision terms keep apart, as the exact check reads them (:meth:`collisions`)."""
+        return grouped([t.exact_check() for _, t in self.objective if t.checks_collisions])
 
     @cached_property
     def without_collision_terms(self) -> Problem | None:

@@ -18,9 +18,9 @@ import numpy as np
 from ..errors import ConfigurationError
 from ..model.joints import JointKind
 from ..model.robot import Robot
-from ..validate import float_copy
+from ..validate import all_finite, float_copy
 from . import blocks as B
-from .kernels import population_cost, population_values, task_errors_at
+from .kernels import population_cost, population_values, task_errors_at, values_and_errors
 
 if TYPE_CHECKING:  # pragma: no cover
     from .kinds import BlockKind
@@ -334,6 +334,16 @@ class Program:
         if errors.size:
             task_errors_at(X, self.packed, errors)
         return errors if np.ndim(x) == 2 else errors[0]
+
+    def values_and_errors(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`values` ``(terms,)`` and :meth:`task_errors` ``(blocks,)`` at one configuration ``x`` ``(n,)``
+        (finite), in one entry into compiled code."""
+        if self.layout.generic or not all_finite(x):  # (Python terms; NaN or inf: values raises, naming it)
+            return self.values(np.atleast_2d(x))[0], self.task_errors(x)
+        self.refresh()
+        V, errors = np.zeros(len(self.terms)), np.empty(self.task_block_rows.size)
+        values_and_errors(np.ascontiguousarray(x, dtype=float), self.packed, V, errors)
+        return V, errors
 
     def limits(self, tolerance: float, angle_tolerance: float) -> np.ndarray:
         """``(blocks,)`` each task block's tolerance: ``angle_tolerance`` [rad] for orientations, ``tolerance``

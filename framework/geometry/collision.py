@@ -38,12 +38,12 @@ from .spheres import SphereCover, sphere_cover
 #: Penetrations shallower than this [m] are touching, not collisions: coal's GJK / EPA resolve distances between
 #: primitives to about 1e-6 m, so a configuration on a collision term's boundary reads as slightly inside.
 TOUCH = 1e-5
-#: Pairs from which the fast check first asks the broad phase which pairs are near (:mod:`framework.geometry.broad_phase`):
-#: below it, coal's pass over every pair (one call into C++) costs less than the broad phase's calls (PR2's own 239
-#: pairs: 101 -> 84 µs; the dual youBot's 906 pairs: 122 -> 33 µs). Against a scene with a sphere, box, capsule or
-#: half-space the broad phase is asked whatever the count: it measures those solids exactly, and few pairs are near
-#: (PR2 over a table, 31 pairs: 22 near by bounding spheres, 0.4 by the table's box; the check 55 -> 47 µs).
-BROAD_PHASE_PAIRS = 100
+#: Pairs from which the fast check first asks the broad phase which pairs are near (:mod:`framework.geometry.broad_phase`,
+#: one compiled call, ~4 µs): below it, coal's pass over every pair (one call into C++) costs less (two spheres' pair:
+#: 6.2 µs against 7.2 with the broad phase; the Panda's own 44 pairs of meshes: 44 µs against 7.7). Against a scene
+#: with a sphere, box, capsule or half-space the broad phase is asked whatever the count: it measures those solids
+#: exactly, and few pairs are near (PR2 over a table, 31 pairs: 22 near by bounding spheres, 0.4 by the table's box).
+BROAD_PHASE_PAIRS = 4
 
 
 @dataclass(frozen=True)
@@ -140,11 +140,11 @@ class RobotShape:
                 contact |= self._in_contact(x)
             self._drop("free_at", contact)
         self._covers: dict[tuple, SphereCover] = {}
-        self._margined: dict[tuple[int, float], tuple[pin.GeometryModel, pin.GeometryData]] = {}
+        self._margined: dict[tuple[int, float, float], tuple[pin.GeometryModel, pin.GeometryData]] = {}
         self._hulls: dict[int, object] = {}
         self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
-        self._scene: tuple[Scene, pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]] | None = None
+        self._scenes: dict[tuple[int, bool], tuple] = {}  # (id(scene), self pairs) -> _with_scene's entry
         self._broad: dict[int, tuple[pin.GeometryModel, BoundingSpheres]] = {}
         self._hull_models: dict[int, tuple[pin.GeometryModel, tuple | None]] = {}
 
@@ -269,21 +269,23 @@ class RobotShape:
             hull = self._hulls[index] = geometry
         return hull
 
-    def _margin_data(self, geometry: pin.GeometryModel, data: pin.GeometryData,
-                     margin: float) -> pin.GeometryData:
-        """``data`` for margin 0; else a data of ``geometry`` whose collision requests have ``margin`` [m] as coal's
-        security margin (pairs closer than it collide), made once per geometry and margin (setting the margin
-        costs ~0.4 µs per pair)."""
-        if margin == 0.0:
+    def _margin_data(self, geometry: pin.GeometryModel, data: pin.GeometryData, margins: tuple[float, float, int]
+                     ) -> pin.GeometryData:
+        """``data`` for margins 0; else a data of ``geometry`` whose collision requests have coal's security margin
+        (pairs closer than it collide) ``margins[0]`` [m] for the first ``margins[2]`` pairs (the robot's own) and
+        ``margins[1]`` for the others (against a scene), made once per geometry and margins (setting a margin costs
+        ~0.4 µs per pair)."""
+        own_margin, scene_margin, own = margins
+        if own_margin == 0.0 and scene_margin == 0.0:
             return data
 
         def make() -> pin.GeometryData:
             margined = geometry.createData()
-            for request in margined.collisionRequests:
-                request.security_margin = margin
+            for k, request in enumerate(margined.collisionRequests):
+                request.security_margin = own_margin if k < own else scene_margin
             return margined
 
-        return _kept(self._margined, (id(geometry), margin), geometry, make)
+        return _kept(self._margined, (id(geometry), own_margin, scene_margin), geometry, make)
 
     def _bounding_spheres(self, geometry: pin.GeometryModel,
                           obstacles: dict[int, np.ndarray] | None = None) -> BoundingSpheres:
@@ -298,17 +300,17 @@ class RobotShape:
 
         return _kept(self._broad, id(geometry), geometry, make)
 
-    def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margin: float, q: np.ndarray,
-                      near: list[int]) -> list[int]:
+    def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margins: tuple[float, float, int],
+                      q: np.ndarray, near: list[int]) -> list[int]:
         """The pairs among ``near`` that coal's collision test flags on the exact geometry at ``q`` (``data``: with
-        ``margin``). A pair with a mesh is tested first on the convex hulls (:meth:`hull`): hulls apart by the
+        ``margins``, :meth:`_margin_data`). A pair with a mesh is tested first on the convex hulls (:meth:`hull`): hulls apart by the
         margin, the meshes they hold are, and two hulls cost coal ~1.5 µs against ~8 µs for two of PR2's meshes."""
         pin.updateGeometryPlacements(self.robot.model, self._data, geometry, data, q)
         hulls = self._hull_model(geometry)
         if hulls is None:
             return [k for k in near if pin.computeCollision(geometry, data, k)]
         model, hull_data, exact = hulls
-        hull_data = self._margin_data(model, hull_data, margin)
+        hull_data = self._margin_data(model, hull_data, margins)
         pin.updateGeometryPlacements(self.robot.model, self._data, model, hull_data)  # the joints placed above
         return [k for k in near if pin.computeCollision(model, hull_data, k)
                 and (exact[k] or pin.computeCollision(geometry, data, k))]
@@ -331,13 +333,19 @@ class RobotShape:
 
         return _kept(self._hull_models, id(geometry), geometry, make)
 
-    def _with_scene(self, scene: Scene) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray]]:
-        """The geometry model with the scene's obstacles added (fixed in the world) and their pairs, kept for the
-        last scene asked; and the solid rows of the obstacles whose exact shape is one, by geometry index."""
-        if self._scene is not None and self._scene[0] is scene:
-            return self._scene[1:]
+    def _with_scene(self, scene: Scene, self_pairs: bool
+                    ) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray], int]:
+        """The geometry model with the scene's obstacles added (fixed in the world): the robot's own pairs first
+        (with ``self_pairs``), then every moving geometry against every obstacle; its data; the solid rows of the
+        obstacles whose exact shape is one, by geometry index; and the count of the robot's own pairs. Kept for the
+        last few scenes asked."""
+        entry = self._scenes.get((id(scene), self_pairs))
+        if entry is not None and entry[0] is scene:  # the entry holds the scene: its id stays its own
+            return entry[1:]
         geometry = self.geometry.copy()
-        geometry.removeAllCollisionPairs()
+        if not self_pairs:
+            geometry.removeAllCollisionPairs()
+        own = len(geometry.collisionPairs)
         robot_geometries = [i for i, g in enumerate(geometry.geometryObjects) if g.parentJoint != 0]
         solids = {}
         for obstacle in scene:
@@ -347,8 +355,10 @@ class RobotShape:
                 geometry.addCollisionPair(pin.CollisionPair(i, k))
             if obstacle.exact:
                 solids[k] = obstacle.solids()[0]
-        self._scene = (scene, geometry, geometry.createData(), solids)
-        return self._scene[1:]
+        if len(self._scenes) >= 8:
+            self._scenes.clear()
+        entry = self._scenes[(id(scene), self_pairs)] = (scene, geometry, geometry.createData(), solids, own)
+        return entry[1:]
 
     @property
     def pairs(self) -> tuple[tuple[str, str], ...]:
@@ -357,54 +367,59 @@ class RobotShape:
         return tuple((objects[p.first].name, objects[p.second].name) for p in self.geometry.collisionPairs)
 
     def check(self, x: np.ndarray, margin: float = 0.0, scene: Scene | None = None, *,
-              self_pairs: bool = True, distances: bool = True) -> CollisionReport:
+              self_pairs: bool = True, distances: bool = True, scene_margin: float | None = None) -> CollisionReport:
         """Distances at joint coordinates ``x`` ``(n,)`` of the robot's own pairs (unless ``self_pairs`` is
         False) and, with ``scene``, of the moving geometries to its obstacles (named ``obstacle:<name>``); pairs
-        closer than ``margin`` [m] are contacts; with margin 0, pairs penetrating by :data:`TOUCH` or more, or at
-        distance exactly 0 (coal's distance between intersecting meshes, which has no depth).
+        closer than their margin [m] — ``margin`` for the robot's own, ``scene_margin`` (default ``margin``)
+        against the scene — are contacts; at margin 0, pairs penetrating by :data:`TOUCH` or more, or at distance
+        exactly 0 (coal's distance between intersecting meshes, which has no depth). Both kinds of pairs are
+        checked in one pass (the geometries placed once, one broad phase).
 
-        ``distances=False`` is the fast check: coal's collision test (with ``margin`` as its security margin:
+        ``distances=False`` is the fast check: coal's collision test (with the margin as its security margin:
         pairs closer than it count) on every pair — with :data:`BROAD_PHASE_PAIRS` pairs or more, or against a
         scene's solids, on the pairs whose bounding spheres (or solids) come within the margin (the others cannot:
         :mod:`framework.geometry.broad_phase`), pairs with a mesh on their convex hulls first — and distances only for the
         pairs it flags: about 50x faster on meshes. The report's ``min_distance`` is then the closest flagged
         pair's, or NaN (not measured) when there is none.
         """
-        if not (math.isfinite(margin) and margin >= 0.0):
-            raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
+        scene_margin = margin if scene_margin is None else scene_margin
+        for m in (margin, scene_margin):
+            if not (math.isfinite(m) and m >= 0.0):
+                raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {m!r}")
         x = self.robot.check_population(x)[0]
-        q = None  # Pinocchio's configuration, made when coal needs it (not when the broad phase finds no pair near)
-        models = [(self.geometry, self._geometry_data, None)] if self_pairs else []
         if scene is not None:
-            models.append(self._with_scene(scene))
-        contacts, smallest = [], np.inf
-        for geometry, data, obstacles in models:
-            objects, pairs = geometry.geometryObjects, geometry.collisionPairs
-            if distances:
-                q = self.robot.to_pinocchio(x) if q is None else q
-                pin.computeDistances(self.robot.model, self._data, geometry, data, q)
-                found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
+            geometry, data, obstacles, own = self._with_scene(scene, self_pairs)
+        elif self_pairs:
+            geometry, data, obstacles, own = self.geometry, self._geometry_data, None, len(self.geometry.collisionPairs)
+        else:
+            return CollisionReport((), float("nan") if not distances else float("inf"), float(margin))
+        margins = (float(margin), float(scene_margin), own)
+        if distances:
+            pin.computeDistances(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x))
+            found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
+        else:
+            data = self._margin_data(geometry, data, margins)
+            if len(geometry.collisionPairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
+                near = self._bounding_spheres(geometry, obstacles).near_pairs(x, max(margin, scene_margin)).tolist()
+                flagged = self._narrow_phase(geometry, data, margins, self.robot.to_pinocchio(x), near) if near else []
             else:
-                data = self._margin_data(geometry, data, margin)
-                if len(pairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
-                    near = self._bounding_spheres(geometry, obstacles).near_pairs(x, margin).tolist()
-                    flagged = []
-                    if near:
-                        q = self.robot.to_pinocchio(x) if q is None else q
-                        flagged = self._narrow_phase(geometry, data, margin, q, near)
-                else:
-                    q = self.robot.to_pinocchio(x) if q is None else q
-                    any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data, q, False)
-                    flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] \
-                        if any_contact else []
-                found = [(k, float(pin.computeDistance(geometry, data, k).min_distance)) for k in flagged]
-            for k, d in found:
-                smallest = min(smallest, d)
-                if (d < margin) if margin > 0 else (d <= -TOUCH or d == 0.0):
-                    contacts.append(Contact(objects[pairs[k].first].name, objects[pairs[k].second].name, d))
+                any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data,
+                                                    self.robot.to_pinocchio(x), False)
+                flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] if any_contact else []
+            if not flagged:
+                return CollisionReport((), float("nan"), float(min(margin, scene_margin) if own else scene_margin))
+            found = [(k, float(pin.computeDistance(geometry, data, k).min_distance)) for k in flagged]
+        objects, pairs = geometry.geometryObjects, geometry.collisionPairs
+        contacts, smallest = [], np.inf
+        for k, d in found:
+            smallest = min(smallest, d)
+            m = margin if k < own else scene_margin
+            if (d < m) if m > 0 else (d <= -TOUCH or d == 0.0):
+                contacts.append(Contact(objects[pairs[k].first].name, objects[pairs[k].second].name, d))
         if not distances and not contacts:
             smallest = float("nan")
-        return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest), float(margin))
+        return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest),
+                               float(min(margin, scene_margin) if own else scene_margin))
 
 
 def _kept(cache: dict, key: object, geometry: pin.GeometryModel, make: Callable[[], Any]) -> Any:
@@ -423,12 +438,3 @@ def _is_mesh(geometry) -> bool:
     import coal
 
     return isinstance(geometry, coal.BVHModelBase)
-
-
-def merge_reports(reports: Sequence[CollisionReport]) -> CollisionReport:
-    """One report of several (each pair once, closest first; the smallest distance and margin of them all,
-    NaN distances left out)."""
-    contacts = {(c.a, c.b): c for r in reports for c in r.contacts}
-    measured = [r.min_distance for r in reports if not np.isnan(r.min_distance)]
-    return CollisionReport(tuple(sorted(contacts.values(), key=lambda c: c.distance)),
-                           min(measured) if measured else float("nan"), min((r.margin for r in reports), default=0.0))

@@ -255,9 +255,9 @@ class Hybrid(IKSolver):
             report = problem.collisions(result.x, margins=True)
             if report.colliding:
                 return None, None, True
-            whole = LocalResult(result.x, True, "reached", problem.program.task_errors(result.x), result.iterations,
-                                result.evaluations, result.restarts, result.regularized, None,
-                                problem.values(result.x[None])[0])
+            values, errors = problem.program.values_and_errors(result.x)
+            whole = LocalResult(result.x, True, "reached", errors, result.iterations, result.evaluations,
+                                result.restarts, result.regularized, None, values)
             return whole, report, True
 
         escalated, check, best = False, None, None

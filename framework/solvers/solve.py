@@ -296,6 +296,8 @@ def result_of(problem: Problem, outcome, solver: str, request: Request, start: f
     x, stop, iterations, evaluations, history, settings, state, errors, values, collisions = outcome
     x = float_copy(x)  # the result's own
     program = problem.program
+    if values is None and errors is None:
+        values, errors = program.values_and_errors(x)
     if values is None:
         values = program.values(x[None])[0]
     value_list = values.tolist()
