@@ -16,8 +16,13 @@ Targets are the grippers of uniform random configurations with both hands in fro
 and no contact (self or table) by coal — collision-free solutions exist by construction. Solved with and without
 ``Obstacles(shape, [table])``, and with ``SelfCollision(shape)`` added.
 
+(b2) A Panda (7 DOF, its SRDF's disabled pairs) among three obstacles (a table top under its base, a wall beside
+it, a ball above): the hand's position and orientation at targets, motion 0.1 on the middle of the box. Targets
+are the hands of uniform random configurations with no contact (self or obstacles) by coal. Solved with and
+without ``SelfCollision(shape) + Obstacles(shape, scene)``.
+
 Success: every position and orientation within 1e-6 m / 1e-6 rad AND no contact on the exact geometry (coal: the
-youBot's collision spheres and box, PR2's meshes) among the pairs the row names, checked afterwards here, for
+youBot's collision spheres and box, PR2's and the Panda's meshes) among the pairs the row names, checked afterwards here, for
 every variant. Times: the solve only (the problem is built before; building one packs the collision blocks, see
 the table), the fastest of three runs of each solve (same seed, same answer), default hybrid, seeds 0, 1, ...
 "Answers on hulls": solves whose answer came from the engine's last steps on the links' convex hulls (taken when
@@ -246,6 +251,8 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
     lines += ["", f"{count} targets of {tries} configurations drawn (the others: a hand behind x = 0.45 m or below "
               f"the table top + 3 cm, or a contact). Building a problem with the collision terms: median "
               f"{1e3 * np.median(build):.2f} ms."]
+    lines += ["", f"The collision terms' cost, median solve time with / without: Obstacles(table) "
+              f"{_ratio(rows_table, rows_free)}, SelfCollision + Obstacles(table) {_ratio(rows_coll, rows_free)}."]
     return lines, {"robot": robot, "free": fw.Problem(robot, fw.Pose(PR2_HANDS[0], targets[0][0])
                                                         + 0.1 * fw.Motion("all", rest)),
                    "coll": fw.Problem(robot, fw.Pose(PR2_HANDS[0], targets[0][0]) + 0.1 * fw.Motion("all", rest)
@@ -253,6 +260,42 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                    "blocks": len(fw.Problem(robot, collision).program.task_blocks), "spheres": len(shape.cover().radii),
                    "pairs": len(shape.pairs), "targets": targets, "shape": shape, "scene": scene, "rest": rest,
                    "collision": collision}
+
+
+#: The Panda's obstacles (b2): a table top under its base, a wall beside it, a ball above.
+PANDA_SCENE = fw.Scene((fw.Box([0.5, 0.0, -0.03], [0.8, 1.2, 0.05], name="table"),
+                        fw.Box([0.45, 0.35, 0.25], [0.3, 0.05, 0.5], name="wall"),
+                        fw.Sphere([0.5, -0.3, 0.6], 0.08, name="ball")))
+
+
+def panda(count: int, rng: np.random.Generator) -> list[str]:
+    """(b2): the Panda's hand at poses among three obstacles, with and without the collision terms."""
+    erd = example_robot_data_dir()
+    robot = fw.load_robot(erd / "panda_description" / "urdf" / "panda.urdf",
+                          joints=[f"panda_joint{i}" for i in range(1, 8)], end_effectors=["panda_hand"])
+    shape = fw.RobotShape(robot, srdf=erd / "panda_description" / "srdf" / "panda.srdf")
+    rest = robot.middle.copy()
+    collision = fw.SelfCollision(shape) + fw.Obstacles(shape, PANDA_SCENE)
+    targets, tries = [], 0
+    while len(targets) < count:
+        tries += 1
+        x = robot.random_configurations(rng, 1)[0]
+        if not shape.check(x, scene=PANDA_SCENE, distances=False).colliding:
+            targets.append(robot.frame_placement(x, "panda_hand"))
+    for extra in (None, collision):  # compile before timing
+        objective = fw.Pose("panda_hand", targets[0]) + 0.1 * fw.Motion("all", rest)
+        fw.solve(fw.Problem(robot, objective if extra is None else objective + extra), max_iterations=5)
+    rows_free, rows_coll = [], []
+    for k, target in enumerate(targets):
+        objective = fw.Pose("panda_hand", target) + 0.1 * fw.Motion("all", rest)
+        for problem, rows in ((fw.Problem(robot, objective), rows_free),
+                              (fw.Problem(robot, objective + collision), rows_coll)):
+            result, seconds = _timed(problem, k)
+            rows.append((*_strictly(problem, result, shape, PANDA_SCENE), seconds, _on_hulls(result)))
+    return HEADER + [_row("unconstrained (checked: self + obstacles)", rows_free),
+                     _row("SelfCollision + Obstacles(scene) (checked: self + obstacles)", rows_coll), "",
+                     f"{count} targets of {tries} configurations drawn (the others: a contact). The collision terms' "
+                     f"cost, median solve time with / without: {_ratio(rows_coll, rows_free)}."]
 
 
 def tracking() -> list[str]:
@@ -435,13 +478,15 @@ def main() -> None:
     rng = np.random.default_rng(2026)
     youbot_lines, youbot_setup = youbot(args.targets, rng)
     pr2_lines, pr2_setup = pr2(args.targets, rng)
+    panda_lines = panda(args.targets, rng)
     tracking_lines = tracking()
     cost_lines = population_costs([("youBot dual mobile", youbot_setup), ("PR2 + table", pr2_setup)], rng)
     else_lines = everywhere_else(youbot_setup, pr2_setup)
     after = report.load()
     paragraphs = __doc__.split("\n\n")
-    body = "\n".join(["\n\n".join(paragraphs[1:6]), "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
+    body = "\n".join(["\n\n".join(paragraphs[1:7]), "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
                       "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
+                      "## (b2) A Panda among three obstacles", "", *panda_lines, "",
                       "## (c) Tracking paper 000's circle around a table", "", tracking.__doc__, "", *tracking_lines, "",
                       "## Population cost of the collision terms", "", " ".join(population_costs.__doc__.split()), "", *cost_lines, "",
                       "## (d) Batches, a path and capability maps", "", " ".join(everywhere_else.__doc__.split()), "",

@@ -51,6 +51,33 @@ def test_bounding_spheres_hold_their_geometry(pr2, youbot, rng):
     assert bounding_sphere(coal.Halfspace(np.array([0.0, 0.0, 1.0]), 0.0))[1] == np.inf
 
 
+def test_holding_capsules_hold_their_mesh_and_prune_pairs_spheres_keep(pr2, rng):
+    """Surface points of every PR2 mesh (at its scale, in its body's frame) lie within the capsule the broad phase
+    holds it in; and at configurations with the arms apart, the capsules leave out pairs the bounding spheres keep
+    (PR2's forearms and upper arms are long: a sphere holds a lot of air around them)."""
+    import coal
+
+    robot, shape = pr2
+    spheres = shape._bounding_spheres(shape.geometry)
+    rows = spheres.solids.reshape(-1, 16)
+    meshes = 0
+    for k, g in enumerate(shape.geometry.geometryObjects):
+        if not isinstance(g.geometry, coal.BVHModelBase):
+            continue
+        meshes += 1
+        local = mesh_surface_points(g.meshPath, 400, rng, np.asarray(g.meshScale))
+        points = local @ g.placement.rotation.T + g.placement.translation
+        R, c, (radius, half) = rows[k, 1:10].reshape(3, 3), rows[k, 10:13], rows[k, 13:15]
+        q = (points - c) @ R  # in the capsule's frame
+        along = q[:, 2] - np.clip(q[:, 2], -half, half)
+        assert np.sqrt(q[:, 0] ** 2 + q[:, 1] ** 2 + along ** 2).max() <= radius + 1e-9, g.name
+    assert meshes > 20
+    only_spheres = bounding_spheres(robot, shape.geometry)
+    X = list(robot.random_configurations(rng, 20)) + [robot.middle]
+    kept = sum(spheres.near_pairs(x, 0.0).size for x in X)
+    assert kept < 0.7 * sum(only_spheres.near_pairs(x, 0.0).size for x in X)
+
+
 def _close_pairs(robot, geometry, x, margin) -> set[int]:
     """The pairs coal's distance computation (every pair) finds closer than ``margin``."""
     data = geometry.createData()

@@ -27,7 +27,7 @@ import pinocchio as pin
 from ..model.kinematics import PopulationKinematics, fk_one
 from ..compiled.native import compiled, internal
 from ..model.robot import Robot
-from .solids import ROW, solid_distance
+from .solids import CAPSULE, ROW, solid_distance
 
 #: Added to every margin [m]: pairs within this of their spheres touching go to coal too (coal's own tolerance on
 #: distances between primitives is about 1e-6 m).
@@ -162,9 +162,60 @@ def _near_pairs(x, tables, spheres, margin, out) -> int:
         if codes[a] >= 0 and _solid_gap(a, world[b], slots, positions, rotations, solids, gradient) - radii[b] \
                 >= margin:
             continue
+        if codes[a] == CAPSULE and codes[b] == CAPSULE \
+                and _capsules_gap(a, b, slots, positions, rotations, solids) >= margin:
+            continue
         out[count] = p
         count += 1
     return count
+
+
+@internal
+def _capsules_gap(a, b, slots, positions, rotations, solids) -> float:
+    """Distance [m] between the capsules of geometries ``a`` and ``b`` (their rows in their bodies' frames; negative:
+    they overlap): their segments' distance less both radii."""
+    ends = np.empty((4, 3))  # a's segment, then b's, in the world
+    for e in range(2):
+        g = a if e == 0 else b
+        s, p = slots[g], ROW * g
+        for k in range(2):
+            sign = -1.0 if k == 0 else 1.0
+            q0, q1, q2 = (solids[p + 10] + sign * solids[p + 14] * solids[p + 3],  # centre ± half length · axis
+                          solids[p + 11] + sign * solids[p + 14] * solids[p + 6],
+                          solids[p + 12] + sign * solids[p + 14] * solids[p + 9])
+            for i in range(3):
+                ends[2 * e + k, i] = (q0, q1, q2)[i] if s < 0 else positions[s, i] + rotations[s, 3 * i] * q0 \
+                    + rotations[s, 3 * i + 1] * q1 + rotations[s, 3 * i + 2] * q2
+    return segments_distance(ends[0], ends[1], ends[2], ends[3]) - solids[ROW * a + 13] - solids[ROW * b + 13]
+
+
+@internal
+def segments_distance(p0, p1, q0, q1) -> float:
+    """Distance [m] between the segments ``p0 p1`` and ``q0 q1`` (each ``(3,)``; Ericson, Real-Time Collision
+    Detection, 5.1.9)."""
+    a = e = b = c = f = 0.0
+    for i in range(3):
+        d1, d2, r = p1[i] - p0[i], q1[i] - q0[i], p0[i] - q0[i]
+        a, e, b, c, f = a + d1 * d1, e + d2 * d2, b + d1 * d2, c + d1 * r, f + d2 * r
+    if a <= 1e-18 and e <= 1e-18:
+        s, t = 0.0, 0.0
+    elif a <= 1e-18:
+        s, t = 0.0, min(max(f / e, 0.0), 1.0)
+    elif e <= 1e-18:
+        s, t = min(max(-c / a, 0.0), 1.0), 0.0
+    else:
+        denominator = a * e - b * b
+        s = min(max((b * f - c * e) / denominator, 0.0), 1.0) if denominator > 1e-18 else 0.0
+        t = (b * s + f) / e
+        if t < 0.0:
+            s, t = min(max(-c / a, 0.0), 1.0), 0.0
+        elif t > 1.0:
+            s, t = min(max((b - c) / a, 0.0), 1.0), 1.0
+    d2 = 0.0
+    for i in range(3):
+        gap = p0[i] + s * (p1[i] - p0[i]) - q0[i] - t * (q1[i] - q0[i])
+        d2 += gap * gap
+    return np.sqrt(d2)
 
 
 @internal

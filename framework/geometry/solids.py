@@ -30,6 +30,26 @@ def solid_row(code: int, rotation: np.ndarray, center: np.ndarray, dims: Sequenc
                            np.asarray(dims, dtype=float)])
 
 
+def holding_capsule(points: np.ndarray) -> np.ndarray:
+    """The row (:func:`solid_row`) of a capsule holding every one of ``points`` ``(k, 3)`` [m] (so their convex
+    hull: a capsule is convex), in their frame: its axis along their principal direction, through the middle of
+    their extent across it; the radius their largest distance from the axis, the half length the least that holds
+    them all."""
+    points = np.asarray(points, dtype=float)
+    mean = points.mean(axis=0)
+    axes = np.linalg.eigh(np.cov((points - mean).T))[1][:, ::-1]  # columns: principal directions, largest first
+    rotation = np.column_stack([axes[:, 1], np.cross(axes[:, 0], axes[:, 1]), axes[:, 0]])  # z: the axis
+    local = (points - mean) @ rotation
+    middle = (local.min(axis=0) + local.max(axis=0)) / 2
+    middle_xy = np.array([middle[0], middle[1], 0.0])
+    across = np.hypot(local[:, 0] - middle[0], local[:, 1] - middle[1])
+    radius = float(across.max())
+    along = np.abs(local[:, 2] - middle[2])
+    half = float(np.max(along - np.sqrt(np.maximum(radius ** 2 - across ** 2, 0.0)), initial=0.0))
+    return solid_row(CAPSULE, rotation, mean + rotation @ (middle_xy + [0.0, 0.0, middle[2]]),
+                     [radius * (1 + 1e-9) + 1e-12, max(half, 0.0), 0.0])
+
+
 @internal(inline=True)
 def solid_distance(x, y, z, params, p, g) -> float:
     """Signed distance [m] of the point ``(x, y, z)`` to the solid whose row (:func:`solid_row`) starts at

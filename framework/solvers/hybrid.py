@@ -160,7 +160,9 @@ class Hybrid(IKSolver):
         draws = stream(request.seed)  # the engine's restarts, one stream through every phase
         first = settings if start == "middle" or not o.restarts else self._in_basin(settings)
         opening = None
-        if not (problem.checks_collisions or o.global_iterations or request.callback):
+        if o.global_iterations or request.callback:
+            return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
+        if not problem.checks_collisions:
             # the common case: the engine from the start; it is the answer when it reaches the task and the
             # weighted sum does not decide (priorities, or no regularizers: no multipliers to weigh), or decides
             # for it (the point on the task also minimizes the weighted sum: see _search, 3.)
@@ -171,6 +173,13 @@ class Hybrid(IKSolver):
                 # (tuple.__new__: the named tuple's own __new__ is a Python call more per solve)
                 return tuple.__new__(Outcome, (opening.x, "tolerance", opening.iterations, opening.evaluations, None,
                                                report, {}, opening.task_errors, opening.values, None))
+        elif self.clears_first(problem):  # likewise without the collision terms, the answer when coal finds it clear
+            opening = solve_local(problem.without_collision_terms.program, x0, draws, first, deadline=request.deadline)
+            whole, check = _clear_answer(problem, opening) if opening.reached else (None, None)
+            if whole is not None:  # (_search's clear_first, its first call)
+                report = self._report(start, budget, whole.restarts, whole.regularized, request, clear_first=True)
+                return tuple.__new__(Outcome, (whole.x, "tolerance", whole.iterations, whole.evaluations, None, report,
+                                               {}, whole.task_errors, whole.values, check))
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
 
     def _in_basin(self, settings: LocalSettings) -> LocalSettings:
@@ -203,7 +212,8 @@ class Hybrid(IKSolver):
     def _search(self, problem, request: Request, x0: np.ndarray, start: str, budget: int, settings: LocalSettings,
                 first: LocalSettings, draws: np.ndarray, opening: LocalResult | None) -> Outcome:
         """Every phase of the module's list; ``opening``: the engine's run from ``x0`` with ``first`` when
-        :meth:`solve` made it already (the whole solve when no collision term, global phase or callback)."""
+        :meth:`solve` made it already (the whole solve when no collision term, global phase or callback; for a loose
+        cover, :meth:`clears_first`, the run without the collision terms, whose answer was short or in contact)."""
         o = self.options
         counter = _Counter(problem, request)
         iterations = evaluations = restarts = 0
@@ -250,22 +260,18 @@ class Hybrid(IKSolver):
             problem's, and the check, when coal finds it clear by the terms' margins (the terms' inequalities are
             inactive there), and True; else ``(None, None, met)``: whether that answer met the task (in contact)."""
             result = engine(x, settings, problem.without_collision_terms.program)
-            if not result.reached:
-                return None, None, False
-            report = problem.collisions(result.x, margins=True)
-            if report.colliding:
-                return None, None, True
-            values, errors = problem.program.values_and_errors(result.x)
-            whole = LocalResult(result.x, True, "reached", errors, result.iterations, result.evaluations,
-                                result.restarts, result.regularized, None, values)
-            return whole, report, True
+            return (*_clear_answer(problem, result), True) if result.reached else (None, None, False)
 
         escalated, check, best = False, None, None
         if o.global_iterations:
             x0 = global_phase(x0[None] if start != "middle" else None, o.global_iterations)
         loose = self.clears_first(problem)
         met = True  # whether the warm start's basin met the task without the collision terms
-        if loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
+        if loose and opening is not None:  # solve() made clear_first's first call: short of the task, or in contact
+            iterations, evaluations, restarts = opening.iterations, opening.evaluations, opening.restarts
+            counter.report(opening.x)
+            met, opening = opening.reached, None
+        elif loose:  # in the warm start's basin first (along a path, a restart would jump to another branch)
             best, check, met = clear_first(x0, first)
         if best is None:  # from the warm start: its basin first (a slow descent near a singularity is no reason
             # to leave it), then random restarts (that basin was searched: the first is drawn too). A basin that
@@ -299,6 +305,17 @@ class Hybrid(IKSolver):
                               on_hulls=any(best is r for r in hull_runs), clear_first=check is not None)
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values, collisions=check)  # check: made at x, when made
+
+
+def _clear_answer(problem, result: LocalResult) -> tuple[LocalResult | None, Any]:
+    """``result`` (the engine on the problem without its collision terms, on the task) as the whole problem's answer,
+    and the exact check at it, when coal finds it clear by the terms' margins (their inequalities are inactive
+    there); else ``(None, None)``."""
+    check = problem.collisions(result.x, margins=True)
+    if check.colliding:
+        return None, None
+    values, errors = problem.program.values_and_errors(result.x)
+    return result._replace(task_errors=errors, values=values, multipliers=None), check
 
 
 def _better(problem, a: LocalResult | None, b: LocalResult) -> LocalResult:
