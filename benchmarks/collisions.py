@@ -16,8 +16,8 @@ Targets are the grippers of uniform random configurations with both hands in fro
 and no contact (self or table) by coal — collision-free solutions exist by construction. Solved with and without
 ``Obstacles(shape, [table])``, and with ``SelfCollision(shape)`` added.
 
-(b2) A Panda (7 DOF, its SRDF's disabled pairs) among three obstacles (a table top under its base, a wall beside
-it, a ball above): the hand's position and orientation at targets, motion 0.1 on the middle of the box. Targets
+(b2) A Panda (7 DOF, its SRDF's disabled pairs) among four obstacles (a table top under its base, a wall beside
+it, a post in front, a ball): the hand's position and orientation at targets, motion 0.1 on the middle of the box. Targets
 are the hands of uniform random configurations with no contact (self or obstacles) by coal. Solved with and
 without ``SelfCollision(shape) + Obstacles(shape, scene)``.
 
@@ -262,14 +262,15 @@ def pr2(count: int, rng: np.random.Generator) -> tuple[list[str], dict]:
                    "collision": collision}
 
 
-#: The Panda's obstacles (b2): a table top under its base, a wall beside it, a ball above.
+#: The Panda's obstacles (b2): a table top under its base, a wall beside it, a post in front, a ball above.
 PANDA_SCENE = fw.Scene((fw.Box([0.5, 0.0, -0.03], [0.8, 1.2, 0.05], name="table"),
-                        fw.Box([0.45, 0.35, 0.25], [0.3, 0.05, 0.5], name="wall"),
-                        fw.Sphere([0.5, -0.3, 0.6], 0.08, name="ball")))
+                        fw.Box([0.45, 0.3, 0.3], [0.4, 0.04, 0.6], name="wall"),
+                        fw.Box([0.4, -0.05, 0.15], [0.06, 0.06, 0.3], name="post"),
+                        fw.Sphere([0.45, -0.3, 0.5], 0.1, name="ball")))
 
 
 def panda(count: int, rng: np.random.Generator) -> list[str]:
-    """(b2): the Panda's hand at poses among three obstacles, with and without the collision terms."""
+    """(b2): the Panda's hand at poses among four obstacles, with and without the collision terms."""
     erd = example_robot_data_dir()
     robot = fw.load_robot(erd / "panda_description" / "urdf" / "panda.urdf",
                           joints=[f"panda_joint{i}" for i in range(1, 8)], end_effectors=["panda_hand"])
@@ -486,7 +487,7 @@ def main() -> None:
     paragraphs = __doc__.split("\n\n")
     body = "\n".join(["\n\n".join(paragraphs[1:7]), "", "## (a) Mobile dual-arm youBot, self-collision", "", *youbot_lines, "",
                       "## (b) PR2 two-hand poses over a table", "", *pr2_lines, "",
-                      "## (b2) A Panda among three obstacles", "", *panda_lines, "",
+                      "## (b2) A Panda among four obstacles", "", *panda_lines, "",
                       "## (c) Tracking paper 000's circle around a table", "", tracking.__doc__, "", *tracking_lines, "",
                       "## Population cost of the collision terms", "", " ".join(population_costs.__doc__.split()), "", *cost_lines, "",
                       "## (d) Batches, a path and capability maps", "", " ".join(everywhere_else.__doc__.split()), "",
