@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numba
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import framework as fw
@@ -227,6 +228,44 @@ def test_a_loose_cover_tries_other_drawn_starts_without_the_terms_before_the_sph
         M = robot.frame_placement(result.configuration, frame)
         assert np.linalg.norm(M.translation - p[:3]) <= 1e-6
     assert not shape.check(result.configuration, scene=scene, distances=False).colliding
+
+
+def test_a_drawn_start_keeps_the_point_reaching_the_task_when_the_regularizers_pull_it_into_contact(erd):
+    """PR2's two grippers at the poses of a collision-free configuration with the left fingers beside the right
+    forearm: the motion regularizer pulls every answer without the collision terms (the warm start's and those of
+    drawn starts) to one place with the fingers in the forearm, and the sphere rows (fatter than the links) never
+    fit there; the point that first reached the task from a drawn start is clear on some of them. The solve
+    answers clear of contact (Pinocchio FK and coal check it here) instead of failing after its whole budget."""
+    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
+           "wrist_roll")
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    scene = fw.Scene((fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table"),))
+    source = np.array([0.17721061665995014, 0.18655195718074313, -0.30313623782171073, 2.1723478647637684,
+                       -1.0137374239803085, -0.16171354177002062, -0.5858484990566715, -0.21779402708558226,
+                       0.05216780209242966, 0.030376558368432893, -2.3610944316588753, -0.20349193782955943,
+                       0.4966309227130976, -0.09432849104394858, -2.755372271378169])
+    assert not shape.check(source, scene=scene, distances=False).colliding
+    frames = ("l_gripper_tool_frame", "r_gripper_tool_frame")
+    poses = {frame: robot.frame_placement(source, frame) for frame in frames}
+    objective = 0.1 * fw.Motion("all", robot.middle)
+    for frame, M in poses.items():
+        objective = objective + fw.Pose(frame, M)
+    problem = fw.Problem(robot, objective + fw.SelfCollision(shape) + fw.Obstacles(shape, scene))
+    free = problem.without_collision_terms
+    rng = np.random.default_rng(0)
+    for k in range(4):  # the premise: regularized answers without the terms are in contact, from any start
+        answer = fw.solve(free, seed=k, initial=robot.random_configurations(rng, 1)[0], tolerance=1e-6)
+        assert answer.success and shape.check(answer.configuration, scene=scene, distances=False).colliding
+    for seed in range(3):
+        result = fw.solve(problem, seed=seed, tolerance=1e-6)
+        assert result.success and result.settings["clear_first"] and result.settings["restart_count"] > 0
+        for frame, M in poses.items():
+            reached = robot.frame_placement(result.configuration, frame)
+            assert np.linalg.norm(reached.translation - M.translation) <= 1e-6
+            assert np.linalg.norm(pin.log3(M.rotation.T @ reached.rotation)) <= 1e-6
+        assert not shape.check(result.configuration, scene=scene, distances=False).colliding
 
 
 def test_the_fast_check_with_a_margin_finds_the_pairs_closer_than_it(erd, rng):

@@ -126,7 +126,7 @@ class Hybrid(IKSolver):
         self._blank_report.update(start=None, max_iterations=None, escalated=False, restart_count=0, regularized=None,
                                   weighted=False, hull_runs=0, on_hulls=False, clear_first=False, population=None)
         self._settings: dict = {}  # the engine settings of requests (local_settings' table)
-        self._basin: dict[LocalSettings, LocalSettings] = {}  # their warm-start variants (_in_basin's table)
+        self._basin: dict = {}  # their warm-start and reach-only variants (_in_basin's, _unregularized's table)
 
     def prepare(self, problem) -> None:
         """The engine's compiled code for ``problem`` (:func:`framework.engine.prepare`), and the closed form's."""
@@ -181,6 +181,13 @@ class Hybrid(IKSolver):
                 return tuple.__new__(Outcome, (whole.x, "tolerance", whole.iterations, whole.evaluations, None, report,
                                                {}, whole.task_errors, whole.values, check))
         return self._search(problem, request, x0, start, budget, settings, first, draws, opening)
+
+    def _unregularized(self, settings: LocalSettings) -> LocalSettings:
+        """``settings`` without the regularizer phase (cached as :meth:`_in_basin`'s)."""
+        cached = self._basin.get((settings, "reach"))
+        if cached is None:
+            cached = self._basin[(settings, "reach")] = replace(settings, regularize=False)
+        return cached
 
     def _in_basin(self, settings: LocalSettings) -> LocalSettings:
         """The settings of a descent that stays in the warm start's basin (no restart, a patient stall rule)."""
@@ -255,12 +262,8 @@ class Hybrid(IKSolver):
             clear = hulled.reached and not problem.collisions(hulled.x).colliding  # nested pairs have no rows
             return hulled if clear else result
 
-        def clear_first(x: np.ndarray | None, settings: LocalSettings):
-            """The problem without its collision terms from ``x`` (``None``: a drawn start): its answer as the whole
-            problem's, and the check, when coal finds it clear by the terms' margins (the terms' inequalities are
-            inactive there), and True; else ``(None, None, met)``: whether that answer met the task (in contact)."""
-            result = engine(x, settings, problem.without_collision_terms.program)
-            return (*_clear_answer(problem, result), True) if result.reached else (None, None, False)
+        def clear_first(x: np.ndarray | None, settings: LocalSettings):  # (see _clear_first)
+            return _clear_first(problem, engine, x, settings, self._unregularized(settings))
 
         escalated, check, best = False, None, None
         if o.global_iterations:
@@ -305,6 +308,27 @@ class Hybrid(IKSolver):
                               on_hulls=any(best is r for r in hull_runs), clear_first=check is not None)
         return Outcome(x, stop, iterations, evaluations, np.array(history) if history else None, report,
                        task_errors=errors, values=values, collisions=check)  # check: made at x, when made
+
+
+def _clear_first(problem, engine, x: np.ndarray | None, settings: LocalSettings, reach_only: LocalSettings):
+    """The problem without its collision terms from ``x`` (``None``: a drawn start; ``engine(x, settings, program)``
+    runs the engine and counts its work): its answer as the whole problem's, and the check, when coal finds it
+    clear by the terms' margins (the terms' inequalities are inactive there), and True; else ``(None, None, met)``:
+    whether that answer met the task (in contact). From a drawn start the task is reached first (``reach_only``:
+    ``settings`` without the regularizers) and regularized from there: where the regularizers pull the answer into
+    contact, the point that reached the task is the answer when it is clear (PR2's regularized answers put its left
+    fingers into its right forearm on one target from every drawn start, where half the points reaching the task
+    are clear)."""
+    plain = problem.without_collision_terms.program
+    if x is not None:
+        result = engine(x, settings, plain)
+        return (*_clear_answer(problem, result), True) if result.reached else (None, None, False)
+    reached = engine(None, reach_only, plain)
+    if not reached.reached:
+        return None, None, False
+    result = engine(reached.x, settings, plain)
+    whole, check = _clear_answer(problem, result) if result.reached else (None, None)
+    return (whole, check, True) if whole is not None else (*_clear_answer(problem, reached), True)
 
 
 def _clear_answer(problem, result: LocalResult) -> tuple[LocalResult | None, Any]:
