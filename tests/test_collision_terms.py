@@ -83,6 +83,13 @@ def test_collision_blocks_are_built_once_per_shape_cover_scene_and_margin(sphere
     assert fw.Obstacles(shape, scene, margin=0.01, cover=exact).blocks(robot) is blocks
     moved = fw.Obstacles(shape, [fw.Sphere([0.0, -L, 0.0], 0.05)], margin=0.01, cover=exact).blocks(robot)
     assert not np.array_equal(moved[0].params, blocks[0].params)  # another scene: its own blocks
+    for make in (lambda: fw.SelfCollision(shape, margin=0.01, cover=exact),
+                 lambda: fw.Obstacles(shape, scene, margin=0.01, cover=exact)):
+        # their packing too (signature and parameters), equal to the blocks' own and read-only
+        a, b = make(), make()
+        assert a.parameters(robot) is b.parameters(robot) and not a.parameters(robot).flags.writeable
+        assert a.packed(robot)[1] == tuple(block.signature() for block in a.blocks(robot))
+        np.testing.assert_array_equal(a.parameters(robot), np.concatenate([k.params for k in a.blocks(robot)]))
 
 
 def test_pairs_whose_covers_never_separate_are_left_to_the_exact_check(erd):

@@ -159,3 +159,22 @@ def test_restarts_tell_a_start_in_contact_by_its_hinge_rows(rng):
         x, count = result.x, result.evaluations - 1
         assert 1 <= count <= CLEAR_DRAWS and np.all((robot.lower <= x) & (x <= robot.upper))
         assert problem.values(x[None])[0, 1] == 0 or count == CLEAR_DRAWS  # clear, or every draw in contact
+
+
+def test_the_hull_steps_tables_are_built_once_per_program(plate):
+    """The hull steps' tables (the other task terms' program, every hull pair's rows) are kept by the program: a
+    second run of the steps reads the same ones and answers the same (each run keeps its own pairs: the first
+    one's dropped pairs do not carry over)."""
+    from framework.engine.hull_reach import _hull_setup, hull_reach
+
+    robot, shape = plate
+    objective = fw.Position("plate", [0.0, 0.0, HALF + 0.003]) + fw.Obstacles(shape, [TABLE]) \
+        + 0.1 * fw.Motion("all", [0.0, 0.3])
+    program = fw.Problem(robot, objective).program
+    start = np.array([0.1, 0.3])
+    first = hull_reach(program, start)
+    kept = program.memo(_hull_setup)
+    again = hull_reach(program, start)
+    assert program.memo(_hull_setup) is kept and first.reached
+    np.testing.assert_array_equal(first.x, again.x)
+    assert len(kept[1].pairs) == len(program.hull_pairs)

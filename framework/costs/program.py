@@ -8,10 +8,10 @@ Terms without blocks (user terms written in numpy) are evaluated by their own ``
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from functools import cached_property
 from operator import attrgetter
-from typing import TYPE_CHECKING, NamedTuple, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol, TypeVar
 
 import numpy as np
 
@@ -21,6 +21,9 @@ from ..model.robot import Robot
 from ..validate import all_finite, float_copy
 from . import blocks as B
 from .kernels import population_cost, population_values, task_errors_at, values_and_errors
+
+#: What :meth:`Program.memo` keeps.
+T = TypeVar("T")
 
 if TYPE_CHECKING:  # pragma: no cover
     from .kinds import BlockKind
@@ -281,10 +284,20 @@ class Program:
 
     def __getstate__(self) -> dict:
         """Pickled with its parameters, not its packed arrays (their block table holds this process's kernel
-        addresses): unpickled, they are packed again from its layout."""
+        addresses): unpickled, they are packed again from its layout. What :meth:`memo` kept is left out."""
         state = dict(self.__dict__)
         state["packed"] = state["packed"].params
+        state.pop("_memo", None)
         return state
+
+    def memo(self, make: Callable[[Program], T]) -> T:
+        """``make(self)``, built once per program: what a solver derives from the program's terms and keeps (the
+        hull steps' tables); not pickled."""
+        table = self.__dict__.setdefault("_memo", {})
+        value = table.get(make)
+        if value is None:
+            value = table[make] = make(self)
+        return value
 
     def __setstate__(self, state: dict) -> None:
         params = state.pop("packed")

@@ -66,7 +66,12 @@ class HullRows:
         self.t = np.array([[pl.translation for pl in p.placements] for p in pairs]).reshape(-1, 2, 3)
         self.c = np.array([[s.aabb_center for s in p.shapes] for p in pairs], dtype=float).reshape(-1, 2, 3)
         self.reach = np.array([p.shapes[0].aabb_radius + p.shapes[1].aabb_radius + p.margin for p in pairs]) + REACH
-        self._slot = slot
+
+    def _select(self, indices: list[int]) -> None:
+        """Keep the pairs ``indices`` only (their tables indexed, not built again)."""
+        self.pairs = [self.pairs[k] for k in indices]
+        for name in ("slots", "R", "t", "c", "reach"):
+            setattr(self, name, getattr(self, name)[indices])
 
     def _placements(self, positions, rotations):
         """World rotations ``(P, 2, 3, 3)`` and origins ``(P, 2, 3)`` of every pair's two solids."""
@@ -115,7 +120,7 @@ class HullRows:
     def subset(self, indices: list[int]) -> HullRows:
         """The same rows over the pairs ``indices`` only."""
         other = copy.copy(self)
-        other._keep([self.pairs[k] for k in indices], self._slot)
+        other._select(list(indices))
         return other
 
     def drop_nested_at(self, x: np.ndarray) -> None:
@@ -133,7 +138,7 @@ class HullRows:
                 if not coal.collide(a, self.transform(R[k, 0], t[k, 0]), b, self.transform(R[k, 1], t[k, 1]),
                                     request, result):
                     nested.add(k)
-        self._keep([p for k, p in enumerate(self.pairs) if k not in nested], self._slot)
+        self._select([k for k in range(len(self.pairs)) if k not in nested])
 
 
 def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
@@ -143,6 +148,14 @@ def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
         and program.loose_hulls
 
 
+def _hull_setup(program: Program) -> tuple[Program, HullRows]:
+    """What :func:`hull_reach` builds once per program: the program of its other task terms, and the rows of every
+    hull pair (each run keeps its own subset)."""
+    task = Program(program.robot, Objective(tuple((w, t) for w, t in zip(program.weight_list, program.terms)
+                                                  if t.is_task and not t.checks_collisions)))
+    return task, HullRows(program, program.hull_pairs)
+
+
 def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = LocalSettings(), *,
                deadline: float | None = None, max_iterations: int = 200) -> LocalResult | None:
     """Reach the task from ``x0`` with the collision terms' pairs measured between convex hulls; ``None`` when
@@ -150,12 +163,10 @@ def hull_reach(program: Program, x0: np.ndarray, settings: LocalSettings = Local
     tolerance and every hull pair at least its margin apart."""
     if not program.hull_pairs:
         return None
-    robot = program.robot
-    task = Program(robot, Objective(tuple((w, t) for w, t in zip(program.weight_list, program.terms)
-                                          if t.is_task and not t.checks_collisions)))
+    task, every_pair = program.memo(_hull_setup)
     if not task.task_rows:
         return None
-    pairs = HullRows(program, program.hull_pairs)
+    pairs = every_pair.subset(range(len(every_pair.pairs)))
     box = search_box(program)
     x = np.array(x0, dtype=float)
     project_into_box(x, box)
