@@ -124,9 +124,10 @@ def solve_batch(
     n = problem.robot.n
     state = BatchState.start(program, np.tile(plan.x0 if plan else np.zeros(n), (B, 1)) if initial is None
                              else initial)
+    clear = np.zeros(B, dtype=bool)  # items the exact check found clear on the way (not checked again below)
     with _Bar(progress, B, f"batch IK ({method.name})") as bar:
         if plan is not None and plan.clear_first:
-            done = _clear_first(problem, targets, state, plan, seeds, time_budget, workers, bar)
+            done = clear = _clear_first(problem, targets, state, plan, seeds, time_budget, workers, bar)
         elif plan is not None and program.task_rows:
             done = _engine(problem, P, state, plan, seeds, time_budget, workers, bar)
         else:
@@ -136,15 +137,16 @@ def solve_batch(
         iterations = state.counts[:, 0].copy()
         rest = np.flatnonzero(~done)
         if rest.size:
-            _solve_each(problem, targets, rest, seeds, initial, state, costs, iterations, method.name, options,
-                        kwargs, bar)
+            clear = clear.copy()
+            clear[rest] = _solve_each(problem, targets, rest, seeds, initial, state, costs, iterations, method.name,
+                                      options, kwargs, bar)
     angular = np.array(program.task_angular, dtype=bool)
     limits = np.where(angular, template.angle_tolerance, template.tolerance)
     if problem.checks_collisions:  # as solve does: the exact check has the last word, not the sphere rows
         limits[np.array(program.task_checked_exactly, dtype=bool)] = np.inf
     success = np.all(state.E <= limits, axis=1) if B else np.zeros(0, dtype=bool)
     if problem.checks_collisions:  # no contact on the exact geometry
-        for i in np.flatnonzero(success):
+        for i in np.flatnonzero(success & ~clear):
             success[i] = not problem.collisions(state.X[i]).colliding
     return BatchResult(state.X, success, state.E, program.task_blocks, costs, iterations, done,
                        time.perf_counter() - started, method.name)
@@ -240,13 +242,16 @@ def _cluster_chunk(items: np.ndarray, problem: Problem, columns: dict, solver, s
 
 
 def _solve_each(problem: Problem, targets, items: np.ndarray, seeds: np.ndarray, initial, state: BatchState,
-                costs: np.ndarray, iterations: np.ndarray, solver: str, options, kwargs: dict, bar: _Bar) -> None:
+                costs: np.ndarray, iterations: np.ndarray, solver: str, options, kwargs: dict, bar: _Bar
+                ) -> np.ndarray:
     """Solve ``items`` one at a time with :func:`solve`, on a copy of the problem whose targeted terms are its own
-    (the user's problem and terms are left as they are)."""
+    (the user's problem and terms are left as they are); returns ``(len(items),)`` whether each answer was found
+    clear by the exact check (with collision terms: the solve's success checked it)."""
     moved = _targeted(problem, targets)
     own = problem.with_own_terms(moved)
     terms = dict(zip(own.names, own.program.terms))
-    for i in items:
+    clear = np.zeros(len(items), dtype=bool)
+    for k, i in enumerate(items):
         for name, (_, column) in moved.items():
             terms[name].set_target(column[i])
         result = solve(own, solver, seed=int(seeds[i]), options=options,
@@ -254,7 +259,9 @@ def _solve_each(problem: Problem, targets, items: np.ndarray, seeds: np.ndarray,
         state.X[i] = result.configuration
         state.E[i] = [result.errors[name] for name in own.program.task_blocks]
         costs[i], iterations[i] = result.cost, result.iterations
+        clear[k] = result.collisions is not None and not result.collisions.colliding
         bar.advance(1)
+    return clear
 
 
 def _targeted(problem: Problem, targets) -> dict[str, tuple[Term, Sequence]]:
