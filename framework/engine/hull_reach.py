@@ -106,13 +106,15 @@ class HullRows:
             deepest = min(deepest, h)
             if h >= 0:
                 continue
-            normal = np.asarray(self.result.normal, dtype=float)
+            n0, n1, n2 = np.asarray(self.result.normal, dtype=float).tolist()
             g = np.zeros(n)
             for side, point, sign in ((0, self.result.getNearestPoint1(), -1.0),
                                       (1, self.result.getNearestPoint2(), 1.0)):
                 s = self.slots[k, side]
-                if s >= 0:
-                    g += sign * (normal @ J[s, :3] - np.cross(normal, point - positions[s]) @ J[s, 3:])
+                if s >= 0:  # n·v(p) = n·J_v + (r × n)·J_ω, r = p − o (np.cross costs ~10 µs a call)
+                    r0, r1, r2 = (np.asarray(point, dtype=float) - positions[s]).tolist()
+                    g += sign * (n0 * J[s, 0] + n1 * J[s, 1] + n2 * J[s, 2] + (r1 * n2 - r2 * n1) * J[s, 3]
+                                 + (r2 * n0 - r0 * n2) * J[s, 4] + (r0 * n1 - r1 * n0) * J[s, 5])
             values.append(h)
             gradients.append(g)
         return deepest, values, gradients
