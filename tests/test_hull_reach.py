@@ -95,6 +95,29 @@ def test_hull_rows_match_differences_of_coal_distances(rng):
     assert checked >= 10
 
 
+def test_hull_rows_measure_every_pair_within_reach(erd, rng):
+    """The pairs a hull row measures (those the exact check's broad phase and the rows' own bounding spheres keep)
+    hold every pair whose hulls coal finds within its margin plus REACH (PR2's meshes with a table, random
+    configurations), and leave most of the others out (each measured pair is a coal distance, ~7 µs)."""
+    from framework.engine.hull_reach import REACH
+
+    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
+           "wrist_roll")
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    table = fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table")
+    program = fw.Problem(robot, fw.SelfCollision(shape) + fw.Obstacles(shape, [table], margin=0.01)).program
+    rows = HullRows(program, program.hull_pairs)
+    within = kept = 0
+    for x in robot.random_configurations(rng, 12):
+        _, _, R, t, near = rows._near(x)
+        close = {k for k in range(len(rows.pairs)) if rows._height(k, R, t) + BUFFER < REACH}
+        assert close <= set(near), sorted(close - set(near))
+        within, kept = within + len(close), kept + len(near)
+    assert within > 0 and kept < 0.1 * 12 * len(rows.pairs)  # 6 % (the rows' bounding spheres alone keep 18 %)
+
+
 def test_hull_steps_only_where_the_spheres_are_looser(plate, erd):
     """Where the sphere model is exact (the youBot's sphere links, a sphere against its platform's box used whole)
     no pair is loose and the hull steps never run; PR2's meshes and the plate's box covered by spheres are."""
@@ -178,3 +201,4 @@ def test_the_hull_steps_tables_are_built_once_per_program(plate):
     assert program.memo(_hull_setup) is kept and first.reached
     np.testing.assert_array_equal(first.x, again.x)
     assert len(kept[1].pairs) == len(program.hull_pairs)
+    assert not kept[1]._unmapped.any()  # every hull pair is one of the exact check's broad phase (measured by it)

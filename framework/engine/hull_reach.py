@@ -56,21 +56,20 @@ class HullRows:
         slot = {j: k for k, j in enumerate(joints)}
         self.request, self.result = coal.DistanceRequest(), coal.DistanceResult()
         self.distance, self.transform = coal.distance, coal.Transform3s
-        self._keep(pairs, slot)
-
-    def _keep(self, pairs, slot) -> None:
-        """Tables of the pairs kept: each side's frame slot (-1: the world), placement, bounding centre."""
+        # tables of the pairs kept: each side's frame slot (-1: the world), placement, bounding centre
         self.pairs = list(pairs)
         self.slots = np.array([[slot.get(j, -1) for j in p.joints] for p in pairs], dtype=np.int64).reshape(-1, 2)
         self.R = np.array([[pl.rotation for pl in p.placements] for p in pairs]).reshape(-1, 2, 3, 3)
         self.t = np.array([[pl.translation for pl in p.placements] for p in pairs]).reshape(-1, 2, 3)
         self.c = np.array([[s.aabb_center for s in p.shapes] for p in pairs], dtype=float).reshape(-1, 2, 3)
         self.reach = np.array([p.shapes[0].aabb_radius + p.shapes[1].aabb_radius + p.margin for p in pairs]) + REACH
+        self.index = np.arange(len(pairs))  # each kept pair's place among ``pairs``
+        self._phases, self._unmapped, self._within = _broad_phases(program, self.pairs)
 
     def _select(self, indices: list[int]) -> None:
         """Keep the pairs ``indices`` only (their tables indexed, not built again)."""
         self.pairs = [self.pairs[k] for k in indices]
-        for name in ("slots", "R", "t", "c", "reach"):
+        for name in ("slots", "R", "t", "c", "reach", "index"):
             setattr(self, name, getattr(self, name)[indices])
 
     def _placements(self, positions, rotations):
@@ -85,8 +84,14 @@ class HullRows:
         positions, rotations = poses.positions[0], poses.rotations[0]
         R, t = self._placements(positions, rotations)
         centres = t + np.einsum("pkij,pkj->pki", R, self.c)
-        near = np.flatnonzero(np.linalg.norm(centres[:, 0] - centres[:, 1], axis=1) <= self.reach)
-        return positions, J[0], R, t, near.tolist()
+        near = np.linalg.norm(centres[:, 0] - centres[:, 1], axis=1) <= self.reach
+        if self._phases:  # and by the exact check's broad phase (meshes in capsules: a few times fewer pairs)
+            found = self._unmapped.copy()
+            for spheres, index in self._phases:
+                hit = index[spheres.near_pairs(x, self._within)]
+                found[hit[hit >= 0]] = True
+            near &= found[self.index]
+        return positions, J[0], R, t, np.flatnonzero(near).tolist()
 
     def _height(self, k: int, R: np.ndarray, t: np.ndarray) -> float:
         """``d − m − BUFFER`` of pair ``k`` (coal's witness points and normal left in ``self.result``)."""
@@ -148,6 +153,27 @@ def blocked_by_spheres(program: Program, task_errors: np.ndarray) -> bool:
     its hulls could give more room (a pair whose sphere model is looser than its hulls)."""
     return any(e > 0 for e, exact in zip(task_errors.tolist(), program.task_checked_exactly) if exact) \
         and program.loose_hulls
+
+
+def _broad_phases(program: Program, pairs: list[HullPair]) -> tuple[list, np.ndarray, float]:
+    """The exact check's broad phase of each collision term of ``program`` (:meth:`RobotShape.broad_phase`) with,
+    for each of its pairs, the index of the hull pair of the same geometries among ``pairs`` (-1: none); which of
+    ``pairs`` no phase holds (always measured); and the distance within which a pair is near (the largest margin
+    plus :data:`REACH`)."""
+    at = {}
+    for k, p in enumerate(pairs):
+        at[tuple(p.names)] = at[tuple(p.names[::-1])] = k
+    phases, mapped = [], np.zeros(len(pairs), dtype=bool)
+    for term in program.terms:
+        check = term.exact_check()
+        if check is None:
+            continue
+        spheres, names = check.shape.broad_phase(check.scene, self_pairs=check.scene is None)
+        index = np.array([at.get(ab, -1) for ab in names], dtype=np.int64)
+        mapped[index[index >= 0]] = True
+        phases.append((spheres, index))
+    margin = max((p.margin for p in pairs), default=0.0)
+    return phases, ~mapped, margin + REACH
 
 
 def _hull_setup(program: Program) -> tuple[Program, HullRows]:

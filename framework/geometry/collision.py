@@ -307,6 +307,18 @@ class RobotShape:
 
         return _kept(self._broad, id(geometry), geometry, make)
 
+    def broad_phase(self, scene: Scene | None = None, *, self_pairs: bool = True
+                    ) -> tuple[BoundingSpheres, tuple[tuple[str, str], ...]]:
+        """The fast check's broad phase (:meth:`check`) over the robot's own pairs (with ``self_pairs``) and, with
+        ``scene``, its moving geometries against the obstacles; and those pairs' geometry names, in its order."""
+        if scene is None:
+            geometry, obstacles = self.geometry, None
+        else:
+            geometry, _, obstacles, _ = self._with_scene(scene, self_pairs)
+        objects = geometry.geometryObjects
+        return self._bounding_spheres(geometry, obstacles), tuple(
+            (objects[p.first].name, objects[p.second].name) for p in geometry.collisionPairs)
+
     def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margins: tuple[float, float, int],
                       q: np.ndarray, near: list[int]) -> list[int]:
         """The pairs among ``near`` that coal's collision test flags on the exact geometry at ``q`` (``data``: with
