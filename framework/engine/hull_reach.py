@@ -101,28 +101,31 @@ class HullRows:
                           self.transform(R[k, 1], t[k, 1]), self.request, self.result)
         return d - pair.margin - BUFFER
 
-    def measure(self, x: np.ndarray, n: int) -> tuple[float, list[float], list[np.ndarray]]:
+    def measure(self, x: np.ndarray, n: int) -> tuple[float, list[float], np.ndarray]:
         """At ``x``: the smallest ``d − m − BUFFER`` over the pairs (inf: none within reach) and, for the pairs
-        below zero, their values and Jacobian rows ``(n,)``."""
+        below zero, their values and Jacobian rows ``(rows, n)``."""
         positions, J, R, t, near = self._near(x)
-        values, gradients, deepest = [], [], np.inf
+        values, active, witnesses, deepest = [], [], [], np.inf
         for k in near:
             h = self._height(k, R, t)
             deepest = min(deepest, h)
-            if h >= 0:
-                continue
-            n0, n1, n2 = np.asarray(self.result.normal, dtype=float).tolist()
-            g = np.zeros(n)
-            for side, point, sign in ((0, self.result.getNearestPoint1(), -1.0),
-                                      (1, self.result.getNearestPoint2(), 1.0)):
-                s = self.slots[k, side]
-                if s >= 0:  # n·v(p) = n·J_v + (r × n)·J_ω, r = p − o (np.cross costs ~10 µs a call)
-                    r0, r1, r2 = (np.asarray(point, dtype=float) - positions[s]).tolist()
-                    g += sign * (n0 * J[s, 0] + n1 * J[s, 1] + n2 * J[s, 2] + (r1 * n2 - r2 * n1) * J[s, 3]
-                                 + (r2 * n0 - r0 * n2) * J[s, 4] + (r0 * n1 - r1 * n0) * J[s, 5])
-            values.append(h)
-            gradients.append(g)
-        return deepest, values, gradients
+            if h < 0:
+                values.append(h)
+                active.append(k)
+                witnesses.append((self.result.normal, self.result.getNearestPoint1(), self.result.getNearestPoint2()))
+        if not values:
+            return deepest, values, np.zeros((0, n))
+        # each row n·(v_b(p_b) − v_a(p_a)), v(p) = J_v + ω × (p − o): n·v(p) = n·J_v + ((p − o) × n)·J_ω
+        W = np.array(witnesses, dtype=float)  # (rows, 3, 3): normal, witness on a, witness on b
+        normal, slots = W[:, 0], self.slots[active]
+        G = np.zeros((len(values), n))
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            on = slots[:, side] >= 0
+            if on.any():
+                s, u = slots[on, side], normal[on]
+                arm = np.cross(W[on, 1 + side] - positions[s], u)
+                G[on] += sign * (np.einsum("ri,rin->rn", u, J[s, :3]) + np.einsum("ri,rin->rn", arm, J[s, 3:]))
+        return deepest, values, G
 
     def subset(self, indices: list[int]) -> HullRows:
         """The same rows over the pairs ``indices`` only."""
