@@ -4,7 +4,8 @@ keeps apart measured between convex hulls (:mod:`framework.geometry.hulls`) inst
 Run when the compiled engine ends short of the task with collision rows active: the sphere model, fatter than the
 links, may leave no room where the links have some (a hand a few millimetres above a table). A Python loop, for
 the few solves that need it: the rows of the other task terms come from the compiled kernel; each pair within
-reach gives coal's signed distance ``d`` between the hulls, witness points ``p_a``, ``p_b`` and normal ``n``
+reach (by the exact check's broad phase, :meth:`~framework.geometry.collision.RobotShape.broad_phase`, and the
+hulls' bounding spheres) gives coal's signed distance ``d`` between the hulls, witness points ``p_a``, ``p_b`` and normal ``n``
 (from ``a`` to ``b``), the hinge row ``min(0, d − m − BUFFER)`` and its Jacobian ``n·(v_b(p_b) − v_a(p_a))``,
 ``v(p) = J_p + ω × (p − o)`` of the body's frame. Pairs whose hulls overlap at the start while their geometries
 do not touch (links nested in each other's hull) have no row; the exact check, which decides success, still holds
@@ -27,7 +28,7 @@ from .local import LocalResult, LocalSettings, project_into_box, residuals, sear
 
 #: Distance kept beyond the margin [m]: a hull pair exactly at the margin reads as touching in coal's check.
 BUFFER = 1e-4
-#: Pairs whose bounding spheres are farther apart than the margin plus this [m] are not measured.
+#: Pairs farther apart than the margin plus this [m] (by their bounding volumes) are not measured.
 REACH = 0.05
 #: Levenberg-Marquardt damping: start (relative to ``‖r‖²``), factors, and the damping that gives up.
 DAMPING_START, DAMPING_UP, DAMPING_DOWN, DAMPING_MAX = 1e-3, 10.0, 0.3, 1e12
