@@ -111,7 +111,9 @@ def test_hull_rows_measure_every_pair_within_reach(erd, rng):
     rows = HullRows(program, program.hull_pairs)
     within = kept = 0
     for x in robot.random_configurations(rng, 12):
-        _, _, R, t, near = rows._near(x)
+        near = rows._near(x)[4]
+        poses, _ = robot.frame_jacobians(x[None], rows.frames)  # every pair placed, to measure them all
+        R, t = rows._placements(poses.positions[0], poses.rotations[0], np.arange(len(rows.pairs)))
         close = {k for k in range(len(rows.pairs)) if rows._height(k, R, t) + BUFFER < REACH}
         assert close <= set(near), sorted(close - set(near))
         within, kept = within + len(close), kept + len(near)

@@ -73,26 +73,33 @@ class HullRows:
         for name in ("slots", "R", "t", "c", "reach", "index"):
             setattr(self, name, getattr(self, name)[indices])
 
-    def _placements(self, positions, rotations):
-        """World rotations ``(P, 2, 3, 3)`` and origins ``(P, 2, 3)`` of every pair's two solids."""
-        Rj = np.concatenate([rotations, np.eye(3)[None]])[self.slots]  # slot -1: the world
-        pj = np.concatenate([positions, np.zeros((1, 3))])[self.slots]
-        return Rj @ self.R, pj + np.einsum("pkij,pkj->pki", Rj, self.t)
+    def _placements(self, positions, rotations, pairs: np.ndarray):
+        """World rotations ``(P, 2, 3, 3)`` and origins ``(P, 2, 3)`` of the two solids of each pair ``pairs``
+        (indices; the other pairs' rows are left unset)."""
+        Rj = np.concatenate([rotations, np.eye(3)[None]])[self.slots[pairs]]  # slot -1: the world
+        pj = np.concatenate([positions, np.zeros((1, 3))])[self.slots[pairs]]
+        R, t = np.empty(self.R.shape), np.empty(self.t.shape)
+        R[pairs], t[pairs] = Rj @ self.R[pairs], pj + np.einsum("pkij,pkj->pki", Rj, self.t[pairs])
+        return R, t
 
     def _near(self, x: np.ndarray):
-        """Frame poses and Jacobians at ``x``, every pair's solids in the world, and the pairs within reach."""
+        """Frame poses and Jacobians at ``x``, the solids in the world of the pairs within reach (by the exact
+        check's broad phase, whose meshes are held in capsules: a few times fewer pairs, then by the hulls' bounding
+        spheres; the other pairs' rows unset), and those pairs."""
         poses, J = self.robot.frame_jacobians(x[None], self.frames)
         positions, rotations = poses.positions[0], poses.rotations[0]
-        R, t = self._placements(positions, rotations)
-        centres = t + np.einsum("pkij,pkj->pki", R, self.c)
-        near = np.linalg.norm(centres[:, 0] - centres[:, 1], axis=1) <= self.reach
-        if self._phases:  # and by the exact check's broad phase (meshes in capsules: a few times fewer pairs)
+        if self._phases:
             found = self._unmapped.copy()
             for spheres, index in self._phases:
                 hit = index[spheres.near_pairs(x, self._within)]
                 found[hit[hit >= 0]] = True
-            near &= found[self.index]
-        return positions, J[0], R, t, np.flatnonzero(near).tolist()
+            candidates = np.flatnonzero(found[self.index])
+        else:
+            candidates = np.arange(len(self.pairs))
+        R, t = self._placements(positions, rotations, candidates)
+        centres = t[candidates] + np.einsum("pkij,pkj->pki", R[candidates], self.c[candidates])
+        near = candidates[np.linalg.norm(centres[:, 0] - centres[:, 1], axis=1) <= self.reach[candidates]]
+        return positions, J[0], R, t, near.tolist()
 
     def _height(self, k: int, R: np.ndarray, t: np.ndarray) -> float:
         """``d − m − BUFFER`` of pair ``k`` (coal's witness points and normal left in ``self.result``)."""
