@@ -443,7 +443,7 @@ def everywhere_else(yb: dict, pr: dict) -> list[str]:
             task = load_task(path)
             case = task.cases[0]
             best = np.inf
-            for _ in range(2):
+            for _ in range(3):  # the fastest of three (a shared machine)
                 t = time.perf_counter()
                 result = track(task.robot, case.trajectory, case.builder, initial=case.initial, tolerance=TOLERANCE)
                 best = min(best, time.perf_counter() - t)
