@@ -290,6 +290,11 @@ class Program:
         state.pop("_memo", None)
         return state
 
+    def __setstate__(self, state: dict) -> None:
+        params = state.pop("packed")
+        self.__dict__.update(state)
+        self.packed = self.layout.packed(self.layout.table(self.weight_list), params)
+
     def memo(self, make: Callable[[Program], T]) -> T:
         """``make(self)``, built once per program: what a solver derives from the program's terms and keeps (the
         hull steps' tables); not pickled."""
@@ -298,11 +303,6 @@ class Program:
         if value is None:
             value = table[make] = make(self)
         return value
-
-    def __setstate__(self, state: dict) -> None:
-        params = state.pop("packed")
-        self.__dict__.update(state)
-        self.packed = self.layout.packed(self.layout.table(self.weight_list), params)
 
     def __init__(self, robot: Robot, objective: Objective):
         pairs = objective.terms

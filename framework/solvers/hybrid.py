@@ -17,8 +17,10 @@
    are at their optimum on the task). Most answers are clear, and the sphere rows would have spent iterations on
    near misses the exact geometry does not have. Otherwise the engine solves the whole problem from the same
    start; from drawn starts, up to :data:`CLEAR_TRIES` of them are solved without the terms first (another
-   branch of the task is often clear). (Where every geometry is a sphere of the cover, the engine's own lazy contact rows,
-   :mod:`~framework.engine.reach`, are as exact and cheaper.)
+   branch of the task is often clear; each reaches the task, then is regularized from there, and where the
+   regularized answer is in contact the point that reached the task is the answer if it is clear). (Where every
+   geometry is a sphere of the cover, the engine's own lazy contact rows, :mod:`~framework.engine.reach`, are as
+   exact and cheaper.)
    Whenever the engine ends short of the task with a collision term's sphere rows active, its last steps are
    taken again on the links' convex hulls (:func:`framework.engine.hull_reach.hull_reach`): the spheres are
    fatter than the links, the hulls hold them tightly, and the exact check decides success anyway.
