@@ -145,6 +145,7 @@ class RobotShape:
         self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
         self._scenes: dict[tuple[int, bool], tuple] = {}  # (id(scene), self pairs) -> _with_scene's entry
+        self._fast_checks: dict[tuple, tuple] = {}  # (id(scene), self pairs, margins) -> _fast's entry
         self._broad: dict[int, tuple[pin.GeometryModel, BoundingSpheres]] = {}
         self._hull_models: dict[int, tuple[pin.GeometryModel, tuple | None]] = {}
 
@@ -319,17 +320,16 @@ class RobotShape:
         return self._bounding_spheres(geometry, obstacles), tuple(
             (objects[p.first].name, objects[p.second].name) for p in geometry.collisionPairs)
 
-    def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, margins: tuple[float, float, int],
+    def _narrow_phase(self, geometry: pin.GeometryModel, data: pin.GeometryData, hulls: tuple | None,
                       q: np.ndarray, near: list[int]) -> list[int]:
-        """The pairs among ``near`` that coal's collision test flags on the exact geometry at ``q`` (``data``: with
-        ``margins``, :meth:`_margin_data`). A pair with a mesh is tested first on the convex hulls (:meth:`hull`): hulls apart by the
-        margin, the meshes they hold are, and two hulls cost coal ~1.5 µs against ~8 µs for two of PR2's meshes."""
-        hulls = self._hull_model(geometry)
+        """The pairs among ``near`` that coal's collision test flags on the exact geometry at ``q`` (``data``, and
+        the hull model's data in ``hulls``: with the check's margins). A pair with a mesh is tested first on the
+        convex hulls (:meth:`hull`): hulls apart by the margin, the meshes they hold are, and two hulls cost coal
+        ~1.5 µs against ~8 µs for two of PR2's meshes."""
         if hulls is None:
             pin.updateGeometryPlacements(self.robot.model, self._data, geometry, data, q)
             return [k for k in near if pin.computeCollision(geometry, data, k)]
         model, hull_data, exact = hulls
-        hull_data = self._margin_data(model, hull_data, margins)
         pin.updateGeometryPlacements(self.robot.model, self._data, model, hull_data, q)
         flagged = [k for k in near if pin.computeCollision(model, hull_data, k)]
         if not flagged:  # (the exact geometry is placed for those flagged only: coal measures their distances next)
@@ -405,32 +405,33 @@ class RobotShape:
         pair's, or NaN (not measured) when there is none.
         """
         scene_margin = margin if scene_margin is None else scene_margin
-        for m in (margin, scene_margin):
-            if not (math.isfinite(m) and m >= 0.0):
-                raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {m!r}")
         x = self.robot.check_population(x)[0]
-        if scene is not None:
-            geometry, data, obstacles, own = self._with_scene(scene, self_pairs)
-        elif self_pairs:
-            geometry, data, obstacles, own = self.geometry, self._geometry_data, None, len(self.geometry.collisionPairs)
-        else:
-            return CollisionReport((), float("nan") if not distances else float("inf"), float(margin))
-        margins = (float(margin), float(scene_margin), own)
-        if distances:
-            pin.computeDistances(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x))
-            found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
-        else:
-            data = self._margin_data(geometry, data, margins)
-            if len(geometry.collisionPairs) >= BROAD_PHASE_PAIRS or obstacles:  # an obstacle's solid: few pairs near
-                near = self._bounding_spheres(geometry, obstacles).near_pairs(x, max(margin, scene_margin)).tolist()
-                flagged = self._narrow_phase(geometry, data, margins, self.robot.to_pinocchio(x), near) if near else []
+        if not distances:
+            geometry, data, spheres, hulls, own, within, reported = self._fast(scene, self_pairs, margin, scene_margin)
+            if geometry is None:  # no pair
+                return CollisionReport((), float("nan"), reported)
+            if spheres is not None:  # an obstacle's solid, or many pairs: few pairs near
+                near = spheres.near_pairs(x, within).tolist()
+                flagged = self._narrow_phase(geometry, data, hulls, self.robot.to_pinocchio(x[None], checked=True)[0],
+                                             near) if near else []
             else:
                 any_contact = pin.computeCollisions(self.robot.model, self._data, geometry, data,
-                                                    self.robot.to_pinocchio(x), False)
+                                                    self.robot.to_pinocchio(x[None], checked=True)[0], False)
                 flagged = [k for k, r in enumerate(data.collisionResults) if r.isCollision()] if any_contact else []
             if not flagged:
-                return CollisionReport((), float("nan"), float(min(margin, scene_margin) if own else scene_margin))
+                return CollisionReport((), float("nan"), reported)
             found = [(k, float(pin.computeDistance(geometry, data, k).min_distance)) for k in flagged]
+        else:
+            for m in (margin, scene_margin):
+                _check_margin(m)
+            if scene is not None:
+                geometry, data, _, own = self._with_scene(scene, self_pairs)
+            elif self_pairs:
+                geometry, data, own = self.geometry, self._geometry_data, len(self.geometry.collisionPairs)
+            else:
+                return CollisionReport((), float("inf"), float(margin))
+            pin.computeDistances(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x))
+            found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
         objects, pairs = geometry.geometryObjects, geometry.collisionPairs
         contacts, smallest = [], np.inf
         for k, d in found:
@@ -442,6 +443,42 @@ class RobotShape:
             smallest = float("nan")
         return CollisionReport(tuple(sorted(contacts, key=lambda c: c.distance)), float(smallest),
                                float(min(margin, scene_margin) if own else scene_margin))
+
+    def _fast(self, scene: Scene | None, self_pairs: bool, margin: float, scene_margin: float) -> tuple:
+        """What the fast check reads for these arguments, made once (for the last few asked): the geometry model
+        (``None``: no pair), its data with the margins, the broad phase (``None``: coal's pass over every pair),
+        the hull model (:meth:`_hull_model`, its data with the margins), the count of the robot's own pairs, the
+        broad phase's margin and the report's."""
+        key = (id(scene), self_pairs, margin, scene_margin)
+        entry = self._fast_checks.get(key)
+        if entry is not None and entry[0] is scene:  # the entry holds the scene: its id stays its own
+            return entry[1:]
+        for m in (margin, scene_margin):
+            _check_margin(m)
+        if scene is not None:
+            geometry, data, obstacles, own = self._with_scene(scene, self_pairs)
+        elif self_pairs:
+            geometry, data, obstacles, own = self.geometry, self._geometry_data, None, len(self.geometry.collisionPairs)
+        else:
+            return None, None, None, None, 0, 0.0, float(margin)
+        margins = (float(margin), float(scene_margin), own)
+        spheres = self._bounding_spheres(geometry, obstacles) \
+            if len(geometry.collisionPairs) >= BROAD_PHASE_PAIRS or obstacles else None
+        hulls = self._hull_model(geometry)
+        if hulls is not None:
+            hulls = (hulls[0], self._margin_data(hulls[0], hulls[1], margins), hulls[2])
+        if len(self._fast_checks) >= 16:
+            self._fast_checks.clear()
+        entry = self._fast_checks[key] = (scene, geometry, self._margin_data(geometry, data, margins), spheres, hulls,
+                                          own, max(margin, scene_margin),
+                                          float(min(margin, scene_margin) if own else scene_margin))
+        return entry[1:]
+
+
+def _check_margin(margin: float) -> None:
+    """Raise unless ``margin`` is a distance >= 0 [m]."""
+    if not (math.isfinite(margin) and margin >= 0.0):
+        raise TaskError(f"a collision check's margin must be a distance >= 0 [m]; got {margin!r}")
 
 
 def _kept(cache: dict, key: object, geometry: pin.GeometryModel, make: Callable[[], Any]) -> Any:

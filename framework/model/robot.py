@@ -200,10 +200,13 @@ class Robot:
         return X
 
     # ------------------------------------------------------------------ conversions (the only place)
-    def to_pinocchio(self, X: np.ndarray) -> np.ndarray:
-        """Pinocchio configurations ``q`` for joint coordinates; ``(n,) -> (nq,)``, ``(pop, n) -> (pop, nq)``."""
+    def to_pinocchio(self, X: np.ndarray, *, checked: bool = False) -> np.ndarray:
+        """Pinocchio configurations ``q`` for joint coordinates; ``(n,) -> (nq,)``, ``(pop, n) -> (pop, nq)``
+        (``checked``: ``X`` is already a finite C-contiguous float ``(pop, n)``, as :meth:`check_population` makes
+        it)."""
         single = np.ndim(X) == 1
-        X = self.check_population(X)
+        if not checked:
+            X = self.check_population(X)
         if self._q_is_x:
             return X[0].copy() if single else X.copy()
         indices, factors = self._q_map
