@@ -49,6 +49,20 @@ def same_framework_env(**extra: str) -> dict[str, str]:
 
 
 @pytest.fixture(scope="module")
+def pr2_table(erd):
+    """``(robot, shape, scene)``: PR2's torso and both 7-DOF arms, its shape with its SRDF's disabled pairs, and a
+    table in front of it (a 0.6 x 1.2 x 0.05 m box, top at 0.625 m; benchmarks/collisions.py's)."""
+    import framework as fw
+
+    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
+           "wrist_roll")
+    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
+                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
+    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
+    return robot, shape, fw.Scene((fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table"),))
+
+
+@pytest.fixture(scope="module")
 def sphere_arm():
     """``(robot, shape, exact cover)`` of the two-joint arm of ``tests/test_collision.py`` whose base and forearm
     are spheres: the cover is the geometry itself, so sphere terms and coal agree (the collision tests use it)."""

@@ -136,7 +136,7 @@ def test_near_pairs_against_every_obstacle_kind(youbot, rng, tmp_path):
     scene = fw.Scene((fw.Box([0.6, 0.0, 0.3], [0.4, 0.6, 0.05], name="table"), fw.Sphere([0.3, 0.4, 0.5], 0.1),
                       fw.Capsule([0.0, -0.5, 0.4], 0.05, 0.4), fw.Plane([0, 0, 0.02], [0, 0, 1]),
                       fw.Mesh(path, center=[0.2, 0.0, 0.7])))
-    geometry, _, obstacles, _ = shape._with_scene(scene, False)
+    geometry, _, obstacles, _ = shape._model(scene, False)
     assert len(obstacles) == 4  # the mesh is no solid: its bounding sphere
     spheres = shape._bounding_spheres(geometry, obstacles)
     assert spheres.radii.max() > 100  # the plane: a large box under the robot, whose sphere is near every body

@@ -206,17 +206,12 @@ def test_a_loose_cover_keeps_the_answer_without_the_terms_when_coal_finds_it_cle
     assert kept >= 3
 
 
-def test_a_loose_cover_tries_other_drawn_starts_without_the_terms_before_the_sphere_rows(erd):
+def test_a_loose_cover_tries_other_drawn_starts_without_the_terms_before_the_sphere_rows(pr2_table):
     """A PR2 two-hand pose over a table (benchmarks/collisions.py's target 33, seed 33) whose first answers without
     the collision terms touch the table or the robot, and which the sphere rows' engine never meets (its spheres
     are fatter than the links: 1,700 restarts missed): another drawn start without the terms gives an answer coal
     finds clear. Success and clearance are checked here by Pinocchio FK and coal."""
-    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
-           "wrist_roll")
-    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
-                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
-    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
-    scene = fw.Scene((fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table"),))
+    robot, shape, scene = pr2_table
     poses = {"l_gripper_tool_frame": [0.6341914987592463, -0.461850130079126, 1.2527543663617564,
                                       0.4948193036205476, 0.8674107038673525, -0.05246453641099369,
                                       -0.8443236955996358, 0.4941777036020543, 0.20713738028558132,
@@ -237,18 +232,13 @@ def test_a_loose_cover_tries_other_drawn_starts_without_the_terms_before_the_sph
     assert not shape.check(result.configuration, scene=scene, distances=False).colliding
 
 
-def test_a_drawn_start_keeps_the_point_reaching_the_task_when_the_regularizers_pull_it_into_contact(erd):
+def test_a_drawn_start_keeps_the_point_reaching_the_task_when_the_regularizers_pull_it_into_contact(pr2_table):
     """PR2's two grippers at the poses of a collision-free configuration with the left fingers beside the right
     forearm: the motion regularizer pulls every answer without the collision terms (the warm start's and those of
     drawn starts) to one place with the fingers in the forearm, and the sphere rows (fatter than the links) never
     fit there; the point that first reached the task from a drawn start is clear on some of them. The solve
     answers clear of contact (Pinocchio FK and coal check it here) instead of failing after its whole budget."""
-    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
-           "wrist_roll")
-    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
-                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
-    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
-    scene = fw.Scene((fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table"),))
+    robot, shape, scene = pr2_table
     source = np.array([0.17721061665995014, 0.18655195718074313, -0.30313623782171073, 2.1723478647637684,
                        -1.0137374239803085, -0.16171354177002062, -0.5858484990566715, -0.21779402708558226,
                        0.05216780209242966, 0.030376558368432893, -2.3610944316588753, -0.20349193782955943,

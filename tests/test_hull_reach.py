@@ -95,19 +95,14 @@ def test_hull_rows_match_differences_of_coal_distances(rng):
     assert checked >= 10
 
 
-def test_hull_rows_measure_every_pair_within_reach(erd, rng):
+def test_hull_rows_measure_every_pair_within_reach(pr2_table, rng):
     """The pairs a hull row measures (those the exact check's broad phase and the rows' own bounding spheres keep)
     hold every pair whose hulls coal finds within its margin plus REACH (PR2's meshes with a table, random
     configurations), and leave most of the others out (each measured pair is a coal distance, ~7 µs)."""
     from framework.engine.hull_reach import REACH
 
-    arm = ("shoulder_pan", "shoulder_lift", "upper_arm_roll", "elbow_flex", "forearm_roll", "wrist_flex",
-           "wrist_roll")
-    robot = fw.load_robot(erd / "pr2_description" / "urdf" / "pr2.urdf",
-                          joints=["torso_lift_joint"] + [f"{s}_{j}_joint" for s in "lr" for j in arm])
-    shape = fw.RobotShape(robot, srdf=erd / "pr2_description" / "srdf" / "pr2.srdf")
-    table = fw.Box([0.7, 0.0, 0.6], [0.6, 1.2, 0.05], name="table")
-    program = fw.Problem(robot, fw.SelfCollision(shape) + fw.Obstacles(shape, [table], margin=0.01)).program
+    robot, shape, scene = pr2_table
+    program = fw.Problem(robot, fw.SelfCollision(shape) + fw.Obstacles(shape, scene, margin=0.01)).program
     rows = HullRows(program, program.hull_pairs)
     within = kept = 0
     for x in robot.random_configurations(rng, 12):

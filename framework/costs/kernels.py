@@ -228,19 +228,21 @@ def _population(X, packed, V, F, weighted) -> int:
                 bad = m
         if bad >= 0:
             break
-        _member(x, ws, V, F, m, weighted)
+        _member(x, ws, V, F, m, weighted, F[:0])
     keep_alive(owners, packed)
     return bad
 
 
 @internal
-def _member(x, ws, V, F, m, weighted) -> None:
-    """Member ``m`` (at ``x``) of :func:`_population`."""
+def _member(x, ws, V, F, m, weighted, errors) -> None:
+    """Member ``m`` (at ``x``) of :func:`_population`; with ``errors`` (not empty), each task block's error
+    ``‖r_b‖`` too, from the same residuals."""
     ws.x = x.ctypes.data
     v, k = views(ws), kinematic_views(ws)
     fk_one(x, k.joints, k.joint_geometry, k.frame_joints, k.frame_geometry, v.poses, k.placements)
     ws.mode, ws.row = RESIDUAL, 0
     f = 0.0
+    t = 0
     for b in range(v.blocks.shape[0]):
         block = v.blocks[b]
         ws.block = b
@@ -250,6 +252,12 @@ def _member(x, ws, V, F, m, weighted) -> None:
             f += block.weight * value
         else:
             V[m, block.term] += value
+        if errors.shape[0] > 0 and block.level == LEVEL_TASK:
+            s = 0.0
+            for c in range(block.rows):
+                s += v.r[c] * v.r[c]
+            errors[t] = np.sqrt(s)
+            t += 1
     if weighted:
         F[m] = f
 
@@ -277,24 +285,7 @@ def values_and_errors(x, packed, V, errors) -> None:
     :func:`task_errors_at` in one pass (one FK, each block's residual once; a solve's answer found on another
     problem, e.g. without its collision terms)."""
     owners, records = workspaces(packed, x.shape[0], 1)
-    ws = records[0]
-    x = borrow(x)
-    ws.x = x.ctypes.data
-    v, k = views(ws), kinematic_views(ws)
-    fk_one(x, k.joints, k.joint_geometry, k.frame_joints, k.frame_geometry, v.poses, k.placements)
-    ws.mode, ws.row = RESIDUAL, 0
-    t = 0
-    for b in range(v.blocks.shape[0]):
-        block = v.blocks[b]
-        ws.block = b
-        call(block.residual, ws)
-        V[block.term] += rho_value(block.rho, block.scale, v.r, 0, block.rows)
-        if block.level == LEVEL_TASK:
-            s = 0.0
-            for c in range(block.rows):
-                s += v.r[c] * v.r[c]
-            errors[t] = np.sqrt(s)
-            t += 1
+    _member(borrow(x), records[0], V.reshape((1, V.shape[0])), V[:0], 0, NO, errors)
     keep_alive(owners, packed)
 
 

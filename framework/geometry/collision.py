@@ -144,7 +144,7 @@ class RobotShape:
         self._hulls: dict[int, object] = {}
         self._memo: dict[tuple, object] = {}
         self._inseparable: dict[tuple, tuple[SphereCover, frozenset[tuple[str, str]]]] = {}
-        self._scenes: dict[tuple[int, bool], tuple] = {}  # (id(scene), self pairs) -> _with_scene's entry
+        self._scenes: dict[tuple[int, bool], tuple] = {}  # (id(scene), self pairs) -> _model's entry
         self._fast_checks: dict[tuple, tuple] = {}  # (id(scene), self pairs, margins) -> _fast's entry
         self._broad: dict[int, tuple[pin.GeometryModel, BoundingSpheres]] = {}
         self._hull_models: dict[int, tuple[pin.GeometryModel, tuple | None]] = {}
@@ -312,10 +312,10 @@ class RobotShape:
                     ) -> tuple[BoundingSpheres, tuple[tuple[str, str], ...]]:
         """The fast check's broad phase (:meth:`check`) over the robot's own pairs (with ``self_pairs``) and, with
         ``scene``, its moving geometries against the obstacles; and those pairs' geometry names, in its order."""
-        if scene is None:
-            geometry, obstacles = self.geometry, None
-        else:
-            geometry, _, obstacles, _ = self._with_scene(scene, self_pairs)
+        model = self._model(scene, self_pairs)
+        if model is None:
+            raise TaskError("a broad phase needs pairs: the robot's own (self_pairs) or a scene's")
+        geometry, _, obstacles, _ = model
         objects = geometry.geometryObjects
         return self._bounding_spheres(geometry, obstacles), tuple(
             (objects[p.first].name, objects[p.second].name) for p in geometry.collisionPairs)
@@ -355,12 +355,15 @@ class RobotShape:
 
         return _kept(self._hull_models, id(geometry), geometry, make)
 
-    def _with_scene(self, scene: Scene, self_pairs: bool
-                    ) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray], int]:
-        """The geometry model with the scene's obstacles added (fixed in the world): the robot's own pairs first
-        (with ``self_pairs``), then every moving geometry against every obstacle; its data; the solid rows of the
-        obstacles whose exact shape is one, by geometry index; and the count of the robot's own pairs. Kept for the
-        last few scenes asked."""
+    def _model(self, scene: Scene | None, self_pairs: bool
+               ) -> tuple[pin.GeometryModel, pin.GeometryData, dict[int, np.ndarray] | None, int] | None:
+        """The geometry model of a check: the robot's own (``scene`` None), or with the scene's obstacles added
+        (fixed in the world): the robot's own pairs first (with ``self_pairs``), then every moving geometry against
+        every obstacle; its data; the solid rows of the obstacles whose exact shape is one, by geometry index; and
+        the count of the robot's own pairs. ``None``: no pair (neither). A scene's is kept for the last few asked."""
+        if scene is None:
+            return (self.geometry, self._geometry_data, None, len(self.geometry.collisionPairs)) if self_pairs \
+                else None
         entry = self._scenes.get((id(scene), self_pairs))
         if entry is not None and entry[0] is scene:  # the entry holds the scene: its id stays its own
             return entry[1:]
@@ -424,12 +427,10 @@ class RobotShape:
         else:
             for m in (margin, scene_margin):
                 _check_margin(m)
-            if scene is not None:
-                geometry, data, _, own = self._with_scene(scene, self_pairs)
-            elif self_pairs:
-                geometry, data, own = self.geometry, self._geometry_data, len(self.geometry.collisionPairs)
-            else:
+            model = self._model(scene, self_pairs)
+            if model is None:  # no pair
                 return CollisionReport((), float("inf"), float(margin))
+            geometry, data, _, own = model
             pin.computeDistances(self.robot.model, self._data, geometry, data, self.robot.to_pinocchio(x))
             found = [(k, float(r.min_distance)) for k, r in enumerate(data.distanceResults)]
         objects, pairs = geometry.geometryObjects, geometry.collisionPairs
@@ -455,12 +456,10 @@ class RobotShape:
             return entry[1:]
         for m in (margin, scene_margin):
             _check_margin(m)
-        if scene is not None:
-            geometry, data, obstacles, own = self._with_scene(scene, self_pairs)
-        elif self_pairs:
-            geometry, data, obstacles, own = self.geometry, self._geometry_data, None, len(self.geometry.collisionPairs)
-        else:
+        model = self._model(scene, self_pairs)
+        if model is None:
             return None, None, None, None, 0, 0.0, float(margin)
+        geometry, data, obstacles, own = model
         margins = (float(margin), float(scene_margin), own)
         spheres = self._bounding_spheres(geometry, obstacles) \
             if len(geometry.collisionPairs) >= BROAD_PHASE_PAIRS or obstacles else None

@@ -127,7 +127,8 @@ def solve_batch(
     clear = np.zeros(B, dtype=bool)  # items the exact check found clear on the way (not checked again below)
     with _Bar(progress, B, f"batch IK ({method.name})") as bar:
         if plan is not None and plan.clear_first:
-            done = clear = _clear_first(problem, targets, state, plan, seeds, time_budget, workers, bar)
+            done = _clear_first(problem, targets, state, plan, seeds, time_budget, workers, bar)
+            clear = done.copy()
         elif plan is not None and program.task_rows:
             done = _engine(problem, P, state, plan, seeds, time_budget, workers, bar)
         else:
@@ -137,7 +138,6 @@ def solve_batch(
         iterations = state.counts[:, 0].copy()
         rest = np.flatnonzero(~done)
         if rest.size:
-            clear = clear.copy()
             clear[rest] = _solve_each(problem, targets, rest, seeds, initial, state, costs, iterations, method.name,
                                       options, kwargs, bar)
     angular = np.array(program.task_angular, dtype=bool)
